@@ -1,0 +1,14 @@
+#include "apps/semap/commands.hpp"
+#include "core/error.hpp"
+
+namespace semap::app {
+
+void add_eval_command(CLI::App& app, CommandRunner& run) {
+  auto* cmd = app.add_subcommand("eval", "Map a dataset: trajectory, semantic TSDF mesh, object map (not built yet)");
+  cmd->allow_extras();
+  cmd->callback([&run] {
+    run = [] () -> int { throw Error("semap eval", "not built yet"); };
+  });
+}
+
+}  // namespace semap::app

@@ -1,0 +1,47 @@
+#pragma once
+// The one pinhole camera model of the project. Depth images inside the program are float
+// metres; the raw 16-bit scale lives here only so io/ can convert.
+#include <Eigen/Core>
+#include <optional>
+
+#include "core/pose.hpp"
+
+namespace semap {
+
+struct PinholeIntrinsics {
+  double fx = 525.0, fy = 525.0, cx = 319.5, cy = 239.5;
+  int width = 640, height = 480;
+
+  Eigen::Matrix3d K() const;
+  /// Pixel (u, v) with depth z (metres) -> camera-frame point.
+  Eigen::Vector3d backproject(double u, double v, double z) const {
+    return {(u - cx) * z / fx, (v - cy) * z / fy, z};
+  }
+  /// Camera-frame point -> pixel (u, v). Caller checks z > 0.
+  Eigen::Vector2d project(const Eigen::Vector3d& p) const {
+    return {fx * p.x() / p.z() + cx, fy * p.y() / p.z() + cy};
+  }
+  bool in_image(double u, double v) const { return u >= 0 && v >= 0 && u < width && v < height; }
+  /// Same camera at another resolution (for image pyramids / network inputs).
+  PinholeIntrinsics scaled(double factor) const;
+  bool operator==(const PinholeIntrinsics&) const = default;
+};
+
+/// An RGB-D camera: depth intrinsics, depth scale, and an optional separate colour camera
+/// (METHODS.md B2). When `colour` is empty, colour is registered to depth.
+struct CameraModel {
+  PinholeIntrinsics depth;
+  /// Raw depth units per metre (TUM: 5000, 7-Scenes: 1000, YCB: 10000).
+  double depth_scale = 5000.0;
+
+  struct ColourCamera {
+    PinholeIntrinsics intrinsics;
+    /// Maps colour-camera coordinates into depth-camera coordinates (METHODS B2: R, T).
+    Pose T_depth_colour = Pose::Identity();
+  };
+  std::optional<ColourCamera> colour;
+
+  const PinholeIntrinsics& colour_intrinsics() const { return colour ? colour->intrinsics : depth; }
+};
+
+}  // namespace semap

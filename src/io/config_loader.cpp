@@ -1,0 +1,150 @@
+#include "io/config_loader.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "core/error.hpp"
+
+namespace semap {
+namespace {
+
+std::string join_key(const std::string& prefix, std::string_view key) {
+  return prefix.empty() ? std::string(key) : prefix + "." + std::string(key);
+}
+
+/// Walks the parameter tree and a YAML map side by side.
+class YamlLoadVisitor : public ParamVisitor {
+ public:
+  YamlLoadVisitor(YAML::Node node, std::string source, std::string prefix)
+      : node_(std::move(node)), source_(std::move(source)), prefix_(std::move(prefix)) {}
+
+  void param(std::string_view key, bool& v, std::string_view, std::string_view) override { read(key, v, "a boolean"); }
+  void param(std::string_view key, int& v, std::string_view, std::string_view) override { read(key, v, "an integer"); }
+  void param(std::string_view key, double& v, std::string_view, std::string_view) override {
+    read(key, v, "a number");
+    if (!std::isfinite(v)) fail(key, "must be a finite number");
+  }
+  void param(std::string_view key, std::string& v, std::string_view, std::string_view) override {
+    read(key, v, "a string");
+  }
+  void section(std::string_view key, std::string_view, const std::function<void(ParamVisitor&)>& body) override {
+    known_.insert(std::string(key));
+    YAML::Node child;
+    if (node_ && node_.IsMap()) child = node_[std::string(key)];
+    if (child && !child.IsNull() && !child.IsMap()) fail(key, "must be a map of parameters");
+    YamlLoadVisitor sub(child && child.IsMap() ? child : YAML::Node(), source_, join_key(prefix_, key));
+    body(sub);
+    sub.check_unknown();
+  }
+
+  void check_unknown() const {
+    if (!node_ || !node_.IsMap()) return;
+    for (const auto& kv : node_) {
+      const std::string k = kv.first.as<std::string>();
+      if (!known_.count(k))
+        throw Error(source_, "unknown config key '" + join_key(prefix_, k) + "' (see `semap config --dump`)");
+    }
+  }
+
+ private:
+  template <class T>
+  void read(std::string_view key, T& v, const char* what) {
+    known_.insert(std::string(key));
+    if (!node_ || !node_.IsMap()) return;
+    const YAML::Node n = node_[std::string(key)];
+    if (!n) return;
+    if (!n.IsScalar()) fail(key, std::string("must be ") + what);
+    try {
+      v = n.as<T>();
+    } catch (const YAML::Exception&) {
+      fail(key, std::string("must be ") + what + ", got '" + n.Scalar() + "'");
+    }
+  }
+  [[noreturn]] void fail(std::string_view key, const std::string& why) const {
+    throw Error(source_, "config key '" + join_key(prefix_, key) + "' " + why);
+  }
+
+  YAML::Node node_;
+  std::string source_, prefix_;
+  std::set<std::string> known_;
+};
+
+class YamlDumpVisitor : public ParamVisitor {
+ public:
+  explicit YamlDumpVisitor(int indent) : indent_(indent) {}
+  void param(std::string_view key, bool& v, std::string_view u, std::string_view d) override {
+    line(key, v ? "true" : "false", u, d);
+  }
+  void param(std::string_view key, int& v, std::string_view u, std::string_view d) override {
+    line(key, std::to_string(v), u, d);
+  }
+  void param(std::string_view key, double& v, std::string_view u, std::string_view d) override {
+    std::ostringstream s;
+    s.precision(10);
+    s << v;
+    std::string t = s.str();
+    if (t.find_first_of(".eEn") == std::string::npos) t += ".0";
+    line(key, t, u, d);
+  }
+  void param(std::string_view key, std::string& v, std::string_view u, std::string_view d) override {
+    YAML::Emitter e;
+    e << YAML::DoubleQuoted << v;
+    line(key, e.c_str(), u, d);
+  }
+  void section(std::string_view key, std::string_view doc, const std::function<void(ParamVisitor&)>& body) override {
+    if (!doc.empty()) out_ << pad() << "# " << doc << "\n";
+    out_ << pad() << key << ":\n";
+    YamlDumpVisitor sub(indent_ + 2);
+    body(sub);
+    out_ << sub.out_.str();
+  }
+  std::string str() const { return out_.str(); }
+
+ private:
+  std::string pad() const { return std::string(indent_, ' '); }
+  void line(std::string_view key, const std::string& value, std::string_view unit, std::string_view doc) {
+    out_ << pad() << key << ": " << value;
+    if (!doc.empty() || !unit.empty()) {
+      out_ << "  # " << doc;
+      if (!unit.empty()) out_ << " [" << unit << "]";
+    }
+    out_ << "\n";
+  }
+  int indent_;
+  std::ostringstream out_;
+};
+
+}  // namespace
+
+void load_config_string(const std::string& yaml, const std::string& source, const ParamTree& tree) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml);
+  } catch (const YAML::Exception& e) {
+    throw Error(source, "malformed YAML: " + std::string(e.what()));
+  }
+  if (root && !root.IsNull() && !root.IsMap()) throw Error(source, "config must be a YAML map");
+  YamlLoadVisitor visitor(root, source, "");
+  tree(visitor);
+  visitor.check_unknown();
+}
+
+void load_config_file(const std::filesystem::path& yaml_path, const ParamTree& tree) {
+  std::ifstream in(yaml_path);
+  if (!in) throw Error(yaml_path, "cannot open config file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  load_config_string(ss.str(), yaml_path.string(), tree);
+}
+
+std::string dump_config(const ParamTree& tree) {
+  YamlDumpVisitor visitor(0);
+  tree(visitor);
+  return visitor.str();
+}
+
+}  // namespace semap

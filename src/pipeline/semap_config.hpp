@@ -1,0 +1,56 @@
+#pragma once
+// The root of the one YAML config: one section per stage. `semap config --dump` prints it.
+#include <filesystem>
+#include <string>
+
+#include "core/params.hpp"
+#include "objects/objects_config.hpp"
+#include "segmentation/segmentation_config.hpp"
+#include "tracking/tracking_config.hpp"
+#include "tsdf/tsdf_config.hpp"
+
+namespace semap {
+
+struct PipelineConfig {
+  int threads = 2;        ///< worker threads for the parallel stages (1 = deterministic)
+  int queue_size = 8;     ///< bounded queue length between stages, frames
+
+  void visit(ParamVisitor& v) {
+    v.param("threads", threads, "", "worker threads (1 gives byte-identical outputs)");
+    v.param("queue_size", queue_size, "frames", "bounded queue length between stages");
+  }
+  void validate() const {
+    require_param(threads >= 1 && threads <= 256, "pipeline.threads", "must be in [1, 256]");
+    require_param(queue_size >= 1, "pipeline.queue_size", "must be >= 1");
+  }
+};
+
+struct SemapConfig {
+  PipelineConfig pipeline;
+  TrackingConfig tracking;
+  SegmentationConfig segmentation;
+  TsdfConfig tsdf;
+  ObjectsConfig objects;
+
+  void visit(ParamVisitor& v) {
+    v.section("pipeline", "threads and queues", [&](ParamVisitor& s) { pipeline.visit(s); });
+    v.section("tracking", "camera tracking (METHODS A1-A4)", [&](ParamVisitor& s) { tracking.visit(s); });
+    v.section("segmentation", "segmentation (METHODS C1, B1, B2)", [&](ParamVisitor& s) { segmentation.visit(s); });
+    v.section("tsdf", "dense semantic TSDF (METHODS B3-B7, A6)", [&](ParamVisitor& s) { tsdf.visit(s); });
+    v.section("objects", "object map (METHODS C2-C5)", [&](ParamVisitor& s) { objects.visit(s); });
+  }
+  void validate() const {
+    pipeline.validate();
+    tracking.validate();
+    segmentation.validate();
+    tsdf.validate();
+    objects.validate();
+  }
+};
+
+/// Defaults overridden by the YAML file (if not empty); validated. Throws semap::Error.
+SemapConfig load_semap_config(const std::filesystem::path& yaml_path);
+/// YAML text of the defaults with docs.
+std::string dump_default_config();
+
+}  // namespace semap
