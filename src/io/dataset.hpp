@@ -1,0 +1,50 @@
+#pragma once
+// Dataset readers: frames stream from disk one at a time (a 10 000-frame sequence is never
+// loaded at once). open_dataset() picks the reader from the folder layout or a dataset.yaml.
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/camera.hpp"
+#include "core/frame.hpp"
+
+namespace semap {
+
+/// One entry of a sequence: which files make frame i (decoded lazily).
+struct FrameRecord {
+  double timestamp = 0.0;
+  std::filesystem::path rgb, depth;
+  std::filesystem::path labels, instances;  ///< optional ground-truth label images
+  std::optional<Pose> gt_T_world_camera;
+};
+
+class DatasetReader {
+ public:
+  virtual ~DatasetReader() = default;
+  /// "tum", "7scenes", "ycb", "synthetic", "yaml".
+  virtual std::string format() const = 0;
+  const std::filesystem::path& root() const { return root_; }
+  const CameraModel& camera() const { return camera_; }
+  size_t size() const { return records_.size(); }
+  const std::vector<FrameRecord>& records() const { return records_; }
+  /// Decodes frame i (throws semap::Error naming the file when it is unreadable/inconsistent).
+  virtual Frame load(size_t i) const;
+  /// Ground-truth trajectory of the sequence (per frame, where known).
+  Trajectory ground_truth() const;
+  bool has_ground_truth() const;
+  /// True when per-frame label/instance ground truth exists.
+  bool has_label_ground_truth() const;
+
+ protected:
+  std::filesystem::path root_;
+  CameraModel camera_;
+  std::vector<FrameRecord> records_;
+};
+
+/// Detects the layout of `root` (dataset.yaml beside the data wins) and opens it. Throws
+/// semap::Error naming the folder when it is missing or no layout matches.
+std::unique_ptr<DatasetReader> open_dataset(const std::filesystem::path& root);
+
+}  // namespace semap

@@ -1,0 +1,17 @@
+#pragma once
+// PLY read/write for point clouds and triangle meshes. Vertex properties: x y z (float),
+// optional nx ny nz, red green blue (uchar), label (uchar, project class id), instance (uint).
+// Writes binary little endian; reads binary little endian and ASCII (Open3D/MeshLab/PCL files).
+#include <filesystem>
+
+#include "core/point_cloud.hpp"
+
+namespace semap {
+
+void write_ply(const std::filesystem::path& path, const PointCloud& cloud);
+void write_ply(const std::filesystem::path& path, const TriangleMesh& mesh);
+/// Reads vertices (and faces, if any). Throws semap::Error naming the file for malformed
+/// headers, truncated data, unsupported formats.
+TriangleMesh read_ply(const std::filesystem::path& path);
+
+}  // namespace semap
