@@ -1,0 +1,195 @@
+#include "pipeline/report.hpp"
+
+#include <algorithm>
+#include <numeric>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+
+#include "core/labels.hpp"
+#include "core/paths.hpp"
+
+namespace semap {
+namespace {
+
+/// World "up": cameras are held upright, so the mean of their -y axes points up.
+Eigen::Vector3d estimate_up(const Trajectory& trajectory) {
+  Eigen::Vector3d up = Eigen::Vector3d::Zero();
+  for (const auto& p : trajectory) up -= p.T_world_camera.linear().col(1);
+  if (up.norm() < 1e-6) return Eigen::Vector3d::UnitZ();
+  return up.normalized();
+}
+
+std::string html_escape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '&': out += "&amp;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+std::string format_value(const nlohmann::json& v) {
+  if (v.is_number_float()) {
+    std::ostringstream s;
+    s.precision(4);
+    s << v.get<double>();
+    return s.str();
+  }
+  if (v.is_string()) return v.get<std::string>();
+  return v.dump();
+}
+
+/// Flattens nested JSON objects into "a.b.c" -> value rows.
+void flatten(const nlohmann::json& j, const std::string& prefix, std::vector<std::pair<std::string, std::string>>& rows) {
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    const std::string key = prefix.empty() ? it.key() : prefix + "." + it.key();
+    if (it->is_object())
+      flatten(*it, key, rows);
+    else if (!it->is_array())
+      rows.emplace_back(key, format_value(*it));
+  }
+}
+
+}  // namespace
+
+cv::Mat render_topdown(const TriangleMesh& mesh, const Trajectory& trajectory,
+                       const std::vector<ReportObject>& objects, int max_side_px) {
+  const Eigen::Vector3d up = estimate_up(trajectory);
+  // Orthonormal basis (ex, ey) of the ground plane.
+  Eigen::Vector3d ex = up.unitOrthogonal();
+  Eigen::Vector3d ey = up.cross(ex);
+  double cam_max_h = -1e9;
+  for (const auto& p : trajectory) cam_max_h = std::max(cam_max_h, up.dot(p.T_world_camera.translation()));
+  const double cut_h = trajectory.empty() ? 1e9 : cam_max_h + 0.3;  // drop the ceiling
+
+  std::vector<Eigen::Vector2d> ground;
+  Eigen::Vector2d lo(1e9, 1e9), hi(-1e9, -1e9);
+  auto extend = [&](const Eigen::Vector3d& p) {
+    const Eigen::Vector2d g(ex.dot(p), ey.dot(p));
+    lo = lo.cwiseMin(g);
+    hi = hi.cwiseMax(g);
+  };
+  for (const auto& v : mesh.vertices.points)
+    if (up.dot(v.cast<double>()) < cut_h) extend(v.cast<double>());
+  for (const auto& p : trajectory) extend(p.T_world_camera.translation());
+  if (lo.x() > hi.x()) { lo.setZero(); hi.setOnes(); }
+  const double margin = 0.05 * std::max(hi.x() - lo.x(), hi.y() - lo.y()) + 1e-3;
+  lo.array() -= margin;
+  hi.array() += margin;
+  const double scale = max_side_px / std::max(hi.x() - lo.x(), hi.y() - lo.y());
+  const int w = std::max(1, static_cast<int>((hi.x() - lo.x()) * scale));
+  const int h = std::max(1, static_cast<int>((hi.y() - lo.y()) * scale));
+  cv::Mat image(h, w, CV_8UC3, cv::Scalar(255, 255, 255));
+  auto to_px = [&](const Eigen::Vector3d& p) {
+    return cv::Point(static_cast<int>((ex.dot(p) - lo.x()) * scale), static_cast<int>((hi.y() - ey.dot(p)) * scale));
+  };
+
+  // Painter's algorithm: low triangles first, so table tops cover the floor under them.
+  const auto& verts = mesh.vertices.points;
+  std::vector<std::pair<float, uint32_t>> order;
+  order.reserve(mesh.triangles.size());
+  for (uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    const auto& tri = mesh.triangles[t];
+    const float height = static_cast<float>(up.dot((verts[tri[0]] + verts[tri[1]] + verts[tri[2]]).cast<double>() / 3.0));
+    if (height < cut_h) order.emplace_back(height, t);
+  }
+  std::sort(order.begin(), order.end());
+  const bool labelled = mesh.vertices.has_labels();
+  const bool coloured = mesh.vertices.has_colours();
+  for (const auto& [height, t] : order) {
+    const auto& tri = mesh.triangles[t];
+    cv::Point pts[3];
+    for (int k = 0; k < 3; ++k) pts[k] = to_px(verts[tri[k]].cast<double>());
+    Rgb8 c{160, 160, 160};
+    if (labelled) c = class_colour(mesh.vertices.labels[tri[0]]);
+    else if (coloured) c = mesh.vertices.colours[tri[0]];
+    cv::fillConvexPoly(image, pts, 3, cv::Scalar(c.b, c.g, c.r), cv::LINE_8);
+  }
+  // Trajectory.
+  for (size_t i = 1; i < trajectory.size(); ++i)
+    cv::line(image, to_px(trajectory[i - 1].T_world_camera.translation()), to_px(trajectory[i].T_world_camera.translation()),
+             cv::Scalar(40, 40, 40), 2, cv::LINE_AA);
+  if (!trajectory.empty()) cv::circle(image, to_px(trajectory.front().T_world_camera.translation()), 6, cv::Scalar(0, 0, 0), -1);
+  // Object footprints (convex hull of the projected box corners) and names.
+  for (const auto& obj : objects) {
+    std::vector<cv::Point> pts, hull;
+    for (const auto& c : obj.corners) pts.push_back(to_px(c));
+    cv::convexHull(pts, hull);
+    const Rgb8 c = class_colour(obj.class_id);
+    cv::polylines(image, hull, true, cv::Scalar(0, 0, 0), 3, cv::LINE_AA);
+    cv::polylines(image, hull, true, cv::Scalar(c.b, c.g, c.r), 1, cv::LINE_AA);
+    const cv::Rect box = cv::boundingRect(hull);
+    const std::string text = std::string(class_name(obj.class_id)) + " " + std::to_string(obj.id);
+    cv::putText(image, text, {box.x, std::max(12, box.y - 3)}, cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  }
+  return image;
+}
+
+nlohmann::json timings_json(const StageTimings& timings) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& stage : timings.stages()) {
+    const TimingSummary s = timings.summary(stage);
+    j[stage] = {{"count", s.count}, {"mean_ms", s.mean_ms}, {"median_ms", s.median_ms}, {"p95_ms", s.p95_ms},
+                {"total_ms", s.total_ms}};
+  }
+  return j;
+}
+
+void write_report_html(const std::filesystem::path& out_dir, const nlohmann::json& report) {
+  std::ostringstream h;
+  h << "<!doctype html><html><head><meta charset=\"utf-8\"><title>semap report</title><style>"
+       "body{font-family:sans-serif;margin:2em;max-width:1100px}table{border-collapse:collapse;margin:1em 0}"
+       "td,th{border:1px solid #ccc;padding:3px 8px;text-align:left}th{background:#eee}"
+       "img{max-width:100%;border:1px solid #ccc}</style></head><body>\n";
+  h << "<h1>semap report</h1>\n";
+  if (report.contains("dataset")) h << "<p>Dataset: <code>" << html_escape(report["dataset"].get<std::string>()) << "</code></p>\n";
+  h << "<h2>Map</h2><img src=\"topdown.png\" alt=\"top-down view of the labelled map with object boxes and trajectory\">\n";
+  auto table = [&](const char* title, const nlohmann::json& j) {
+    if (j.is_null() || j.empty()) return;
+    std::vector<std::pair<std::string, std::string>> rows;
+    flatten(j, "", rows);
+    h << "<h2>" << title << "</h2><table><tr><th>metric</th><th>value</th></tr>\n";
+    for (const auto& [k, v] : rows) h << "<tr><td>" << html_escape(k) << "</td><td>" << html_escape(v) << "</td></tr>\n";
+    h << "</table>\n";
+  };
+  table("Summary", report.value("summary", nlohmann::json{}));
+  table("Evaluation", report.value("evaluation", nlohmann::json{}));
+  table("Objects per class", report.value("objects_per_class", nlohmann::json{}));
+  if (report.contains("timings")) {
+    h << "<h2>Time per stage</h2><table><tr><th>stage</th><th>count</th><th>mean ms</th><th>median ms</th><th>p95 ms</th></tr>\n";
+    for (auto it = report["timings"].begin(); it != report["timings"].end(); ++it)
+      h << "<tr><td>" << html_escape(it.key()) << "</td><td>" << (*it)["count"] << "</td><td>" << format_value((*it)["mean_ms"])
+        << "</td><td>" << format_value((*it)["median_ms"]) << "</td><td>" << format_value((*it)["p95_ms"]) << "</td></tr>\n";
+    h << "</table>\n";
+  }
+  h << "</body></html>\n";
+  write_file_atomic(out_dir / "report.html", h.str());
+}
+
+std::string summary_table(const nlohmann::json& report) {
+  std::vector<std::pair<std::string, std::string>> rows;
+  for (const char* section : {"summary", "evaluation", "objects_per_class"})
+    if (report.contains(section)) flatten(report[section], section, rows);
+  size_t width = 0;
+  for (const auto& r : rows) width = std::max(width, r.first.size());
+  std::ostringstream s;
+  s << std::string(width + 20, '-') << "\n";
+  for (const auto& [k, v] : rows) s << k << std::string(width - k.size() + 2, ' ') << v << "\n";
+  if (report.contains("timings")) {
+    s << std::string(width + 20, '-') << "\nstage" << std::string(width > 3 ? width - 3 : 2, ' ') << "mean ms  p95 ms\n";
+    for (auto it = report["timings"].begin(); it != report["timings"].end(); ++it) {
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "%7.2f %7.2f", (*it)["mean_ms"].get<double>(), (*it)["p95_ms"].get<double>());
+      s << it.key() << std::string(width > it.key().size() ? width - it.key().size() + 2 : 2, ' ') << buf << "\n";
+    }
+  }
+  s << std::string(width + 20, '-') << "\n";
+  return s.str();
+}
+
+}  // namespace semap
