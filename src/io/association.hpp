@@ -1,6 +1,7 @@
 #pragma once
 // Timestamp association as in the TUM benchmark's associate.py: greedy over all candidate
 // pairs sorted by |a - b| (+ offset), each timestamp used at most once, max difference.
+#include <cstddef>
 #include <utility>
 #include <vector>
 

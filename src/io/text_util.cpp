@@ -1,0 +1,57 @@
+#include "io/text_util.hpp"
+
+#include <charconv>
+#include <fstream>
+#include <sstream>
+
+#include "core/error.hpp"
+
+namespace semap::io_detail {
+
+std::string read_file_bytes(const std::filesystem::path& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw Error(path, "file not found");
+  if (std::filesystem::is_directory(path, ec)) throw Error(path, "is a folder, expected a file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path, "cannot open for reading");
+  std::ostringstream buffer;
+  buffer << in.rdbuf();
+  if (in.bad()) throw Error(path, "read failed");
+  return buffer.str();
+}
+
+std::vector<std::string_view> split_fields(std::string_view line) {
+  std::vector<std::string_view> fields;
+  size_t i = 0;
+  auto is_sep = [](char c) { return c == ' ' || c == '\t' || c == ',' || c == '\r'; };
+  while (i < line.size()) {
+    while (i < line.size() && is_sep(line[i])) ++i;
+    size_t j = i;
+    while (j < line.size() && !is_sep(line[j])) ++j;
+    if (j > i) fields.push_back(line.substr(i, j - i));
+    i = j;
+  }
+  return fields;
+}
+
+std::optional<double> parse_double(std::string_view field) {
+  if (!field.empty() && field.front() == '+') field.remove_prefix(1);
+  double value = 0.0;
+  const auto [ptr, ec] = std::from_chars(field.data(), field.data() + field.size(), value);
+  if (ec != std::errc() || ptr != field.data() + field.size() || field.empty()) return std::nullopt;
+  return value;
+}
+
+bool is_blank_or_comment(std::string_view line) {
+  for (char c : line) {
+    if (c == '#') return true;
+    if (c != ' ' && c != '\t' && c != '\r') return false;
+  }
+  return true;
+}
+
+std::string where(const std::string& source, size_t line_no) {
+  return source + ":" + std::to_string(line_no);
+}
+
+}  // namespace semap::io_detail

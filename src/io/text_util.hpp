@@ -1,0 +1,33 @@
+#pragma once
+// Small text helpers shared by the io parsers (TUM lists, trajectories, camera files).
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace semap::io_detail {
+
+/// Whole file as bytes; throws semap::Error naming the file when it is missing/unreadable.
+std::string read_file_bytes(const std::filesystem::path& path);
+/// Splits on spaces, tabs and commas (as TUM's associate.py does); drops '\r'.
+std::vector<std::string_view> split_fields(std::string_view line);
+/// Strict double parse of a whole field (no trailing characters); nullopt when malformed.
+std::optional<double> parse_double(std::string_view field);
+/// True for empty lines and '#' comments.
+bool is_blank_or_comment(std::string_view line);
+/// Calls fn(line, line_number) for each line (1-based numbering).
+template <class F>
+void for_each_line(std::string_view text, F&& fn) {
+  size_t line_no = 0, start = 0;
+  while (start < text.size()) {
+    size_t end = text.find('\n', start);
+    if (end == std::string_view::npos) end = text.size();
+    fn(text.substr(start, end - start), ++line_no);
+    start = end + 1;
+  }
+}
+/// "FILE:LINE" for messages.
+std::string where(const std::string& source, size_t line_no);
+
+}  // namespace semap::io_detail

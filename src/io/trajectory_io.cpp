@@ -1,0 +1,66 @@
+#include "io/trajectory_io.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+#include "core/error.hpp"
+#include "core/paths.hpp"
+#include "io/text_util.hpp"
+
+namespace semap {
+
+namespace {
+// Quaternions further than this from unit norm are rejected, nearer ones are normalised.
+constexpr double kQuaternionNormTolerance = 1e-3;
+}  // namespace
+
+Trajectory parse_tum_trajectory(const std::string& text, const std::string& source) {
+  using namespace io_detail;
+  Trajectory trajectory;
+  for_each_line(text, [&](std::string_view line, size_t line_no) {
+    if (is_blank_or_comment(line)) return;
+    const auto fields = split_fields(line);
+    if (fields.size() != 8)
+      throw Error(where(source, line_no), "expected 8 numbers 'timestamp tx ty tz qx qy qz qw', got " +
+                                              std::to_string(fields.size()) + " fields");
+    double v[8];
+    for (int k = 0; k < 8; ++k) {
+      const auto value = parse_double(fields[k]);
+      if (!value) throw Error(where(source, line_no), "malformed number '" + std::string(fields[k]) + "'");
+      if (!std::isfinite(*value)) throw Error(where(source, line_no), "NaN or Inf value");
+      v[k] = *value;
+    }
+    const Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);  // Eigen takes (w, x, y, z)
+    if (std::abs(q.norm() - 1.0) > kQuaternionNormTolerance)
+      throw Error(where(source, line_no), "quaternion is not unit (norm " + std::to_string(q.norm()) + ")");
+    if (!trajectory.empty() && v[0] <= trajectory.back().timestamp)
+      throw Error(where(source, line_no), v[0] == trajectory.back().timestamp
+                                              ? "duplicate timestamp"
+                                              : "timestamp not increasing");
+    trajectory.push_back({v[0], pose_from_tq({v[1], v[2], v[3]}, q)});
+  });
+  return trajectory;
+}
+
+Trajectory read_tum_trajectory(const std::filesystem::path& path) {
+  return parse_tum_trajectory(io_detail::read_file_bytes(path), path.string());
+}
+
+void write_tum_trajectory(const std::filesystem::path& path, const Trajectory& trajectory) {
+  std::string text = "# timestamp tx ty tz qx qy qz qw\n";
+  char line[512];
+  for (const auto& sp : trajectory) {
+    if (!sp.T_world_camera.matrix().allFinite() || !std::isfinite(sp.timestamp))
+      throw Error(path, "refusing to write a non-finite pose");
+    const Eigen::Vector3d t = sp.T_world_camera.translation();
+    Eigen::Quaterniond q(sp.T_world_camera.linear());
+    q.normalize();
+    if (q.w() < 0) q.coeffs() *= -1.0;  // canonical sign, so files are reproducible
+    std::snprintf(line, sizeof line, "%.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", sp.timestamp, t.x(),
+                  t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
+    text += line;
+  }
+  write_file_atomic(path, text);
+}
+
+}  // namespace semap
