@@ -35,6 +35,13 @@ double median_of(std::vector<double> values) {
   return m;
 }
 
+// Rotation angle via atan2(sin, cos): accurate near 0, unlike acos of the trace.
+double rotation_angle_precise(const Pose& pose) {
+  const Eigen::Matrix3d& R = pose.linear();
+  const Eigen::Vector3d axis_sin(R(2, 1) - R(1, 2), R(0, 2) - R(2, 0), R(1, 0) - R(0, 1));
+  return std::atan2(0.5 * axis_sin.norm(), 0.5 * (R.trace() - 1.0));
+}
+
 }  // namespace
 
 AteResult compute_ate(const Trajectory& gt, const Trajectory& est, double max_dt) {
@@ -88,7 +95,11 @@ RpeResult compute_rpe(const Trajectory& gt, const Trajectory& est, double delta_
 
   RpeResult result;
   double trans_sq = 0.0, rot_sq = 0.0, trans_sum = 0.0, rot_sum = 0.0;
-  const double tolerance = 0.1 * delta_s;
+  // Allowed mismatch of t_j against t_i + delta: half the median frame spacing (the nearest
+  // frame on a regular grid is always within it), at least max_dt.
+  std::vector<double> spacing;
+  for (size_t k = 1; k < stamps.size(); ++k) spacing.push_back(stamps[k] - stamps[k - 1]);
+  const double tolerance = std::max(max_dt, 0.5 * median_of(std::move(spacing)));
   for (size_t i = 0; i < stamps.size(); ++i) {
     const double target = stamps[i] + delta_s;
     // Closest associated est timestamp to t_i + delta.
@@ -103,7 +114,7 @@ RpeResult compute_rpe(const Trajectory& gt, const Trajectory& est, double delta_
     const Pose& ej = est[matches[j].second].T_world_camera;
     const Pose error = (gi.inverse() * gj).inverse() * (ei.inverse() * ej);
     const double trans = error.translation().norm() / elapsed;
-    const double rot = rotation_angle(error) * 180.0 / M_PI / elapsed;
+    const double rot = rotation_angle_precise(error) * 180.0 / M_PI / elapsed;
     trans_sq += trans * trans;
     rot_sq += rot * rot;
     trans_sum += trans;

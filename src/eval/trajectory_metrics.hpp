@@ -36,7 +36,8 @@ struct RpeResult {
 /// - est poses are associated to gt poses as in compute_ate (max_dt); only associated est
 ///   poses take part, in timestamp order;
 /// - for every such pose i, j is the associated pose whose timestamp is closest to
-///   t_i + delta_s; the pair is kept when j > i and |t_j - (t_i + delta_s)| <= 0.1 * delta_s
+///   t_i + delta_s; the pair is kept when j > i and |t_j - (t_i + delta_s)| <= max(max_dt,
+///   half the median spacing of the associated est timestamps)
 ///   (no random subsampling, every pair kept);
 /// - error E = (gt_i^-1 gt_j)^-1 (est_i^-1 est_j) (Sturm et al. 2012, eq. 1); the pair's
 ///   translational error |t(E)| and rotation angle of E are divided by the pair's elapsed
