@@ -1,16 +1,112 @@
 #pragma once
+#include <string>
+
 #include "core/params.hpp"
 
 namespace semap {
 
 /// Parameters of the object map (METHODS.md C2-C5).
 struct ObjectsConfig {
-  int optimise_every = 50;  ///< T, frames between map optimisations (C5)
+  // --- C2: per-keyframe segmentation ---
+  std::string segmentation_mode = "supervoxel";  ///< "supervoxel" (C2) or "backprojection" (plain masks)
+  int pixel_stride = 2;            ///< use every N-th pixel when building the frame cloud
+  double max_depth = 4.0;          ///< m, ignore depth beyond this
+  double voxel_resolution = 0.01;  ///< m, VCCS voxel size
+  double seed_resolution = 0.06;   ///< m, VCCS seed spacing (supervoxel size)
+  double colour_importance = 0.2;  ///< VCCS colour weight
+  double spatial_importance = 0.4; ///< VCCS spatial weight
+  double normal_importance = 1.0;  ///< VCCS normal weight
+  double plane_max_curvature = 0.04;  ///< supervoxels below this curvature may belong to a support plane (C2.4)
+  double plane_max_angle_deg = 10.0;  ///< deg, max normal angle between supervoxels of one plane
+  double plane_max_distance = 0.02;   ///< m, max point-to-plane distance of a supervoxel centre
+  int plane_min_supervoxels = 4;      ///< smaller planar regions get plane label 0
+  double plane_min_extent = 0.3;      ///< m, a support plane's centres must span at least this
+  double convex_sanity_angle_deg = 60.0;  ///< deg, LCCP sanity criterion: min angle between c_i-c_j and n_i x n_j
+  double weight_different_masks = 3.0;  ///< omega_diff (C2.3), must exceed weight_background
+  double weight_background = 1.0;       ///< omega_bg (C2.3), > 0
+  double felzenszwalb_k = 2.0;          ///< K of the graph clustering (C2.5)
+  int min_segment_points = 50;          ///< object segments with fewer points are dropped
+  double mask_min_score = 0.0;          ///< detections below this score are ignored
+
+  // --- C3/C4: map and association ---
+  double map_voxel_size = 0.01;       ///< m, instance point sets are voxel-downsampled to this
+  double association_distance = 1.0;  ///< m, d_assoc: centroid distance gate (C4)
+  double overlap_distance = 0.03;     ///< m, d_point: a segment point overlaps when an instance point is this close
+  double overlap_ratio = 0.5;         ///< r: overlap fraction above which a segment merges (C4)
+
+  // --- C5: optimisation ---
+  bool enable_optimisation = true;  ///< run C5 every optimise_every frames
+  bool enable_merge = true;         ///< C5 merge of stable pairs
+  bool enable_delete = true;        ///< C5 deletion of rarely associated instances
+  int optimise_every = 50;          ///< T, frames between map optimisations (C5)
+  int stable_min_associations = 5;  ///< s_i at or above this promotes to STABLE
+  double delete_fraction = 0.1;     ///< delete when s_i + n_i < delete_fraction * T (and unseen recently)
+  int recent_frames = 10;           ///< frames: instances seen this recently are never deleted
+  double merge_coassociation = 0.7; ///< co-association count must exceed this fraction of s_i or s_j
+  double merge_overlap_ratio = 0.3; ///< geometric overlap (C4 formula, smaller onto larger) needed to merge
+  double merge_max_js = 0.3;        ///< nats, max Jensen-Shannon divergence of augmented mean scores
+  bool final_optimisation = true;   ///< finish() runs one more optimisation, ignoring recency
 
   void visit(ParamVisitor& v) {
+    v.param("segmentation_mode", segmentation_mode, "", "supervoxel (C2 guided clustering) or backprojection (masks only)");
+    v.param("pixel_stride", pixel_stride, "px", "use every N-th pixel for the frame cloud");
+    v.param("max_depth", max_depth, "m", "ignore depth beyond this");
+    v.param("voxel_resolution", voxel_resolution, "m", "VCCS voxel size (C2.1)");
+    v.param("seed_resolution", seed_resolution, "m", "VCCS seed spacing (C2.1)");
+    v.param("colour_importance", colour_importance, "", "VCCS colour weight");
+    v.param("spatial_importance", spatial_importance, "", "VCCS spatial weight");
+    v.param("normal_importance", normal_importance, "", "VCCS normal weight");
+    v.param("plane_max_curvature", plane_max_curvature, "", "max supervoxel curvature for support planes (C2.4)");
+    v.param("plane_max_angle_deg", plane_max_angle_deg, "deg", "max normal angle within a support plane");
+    v.param("plane_max_distance", plane_max_distance, "m", "max distance of a supervoxel centre to its plane");
+    v.param("plane_min_supervoxels", plane_min_supervoxels, "", "min supervoxels of a support plane");
+    v.param("plane_min_extent", plane_min_extent, "m", "min extent of a support plane");
+    v.param("convex_sanity_angle_deg", convex_sanity_angle_deg, "deg", "LCCP sanity criterion angle (C2.4)");
+    v.param("weight_different_masks", weight_different_masks, "", "omega_diff (C2.3)");
+    v.param("weight_background", weight_background, "", "omega_bg (C2.3)");
+    v.param("felzenszwalb_k", felzenszwalb_k, "", "K of the graph clustering (C2.5)");
+    v.param("min_segment_points", min_segment_points, "points", "drop smaller object segments");
+    v.param("mask_min_score", mask_min_score, "", "ignore detections below this score");
+    v.param("map_voxel_size", map_voxel_size, "m", "voxel size of instance point sets (C3)");
+    v.param("association_distance", association_distance, "m", "d_assoc centroid gate (C4)");
+    v.param("overlap_distance", overlap_distance, "m", "d_point of the overlap test (C4)");
+    v.param("overlap_ratio", overlap_ratio, "", "r, overlap fraction to merge a segment (C4)");
+    v.param("enable_optimisation", enable_optimisation, "", "run the C5 optimisation");
+    v.param("enable_merge", enable_merge, "", "C5 merge of stable pairs");
+    v.param("enable_delete", enable_delete, "", "C5 deletion of rare instances");
     v.param("optimise_every", optimise_every, "frames", "T: optimise the object map every T frames (C5)");
+    v.param("stable_min_associations", stable_min_associations, "", "s_i needed for STABLE (C5)");
+    v.param("delete_fraction", delete_fraction, "", "delete when s_i + n_i < fraction * T (C5)");
+    v.param("recent_frames", recent_frames, "frames", "instances seen this recently are kept (C5)");
+    v.param("merge_coassociation", merge_coassociation, "", "co-association fraction for merging (C5)");
+    v.param("merge_overlap_ratio", merge_overlap_ratio, "", "overlap needed for merging (C5)");
+    v.param("merge_max_js", merge_max_js, "nats", "max JS divergence for merging (C5)");
+    v.param("final_optimisation", final_optimisation, "", "finish() optimises once more, ignoring recency");
   }
-  void validate() const { require_param(optimise_every >= 1, "objects.optimise_every", "must be >= 1"); }
+  void validate() const {
+    require_param(segmentation_mode == "supervoxel" || segmentation_mode == "backprojection",
+                  "objects.segmentation_mode", "must be supervoxel or backprojection");
+    require_param(pixel_stride >= 1, "objects.pixel_stride", "must be >= 1");
+    require_param(max_depth > 0, "objects.max_depth", "must be > 0");
+    require_param(voxel_resolution > 0, "objects.voxel_resolution", "must be > 0");
+    require_param(seed_resolution > voxel_resolution, "objects.seed_resolution", "must exceed voxel_resolution");
+    require_param(weight_background > 0, "objects.weight_background", "must be > 0");
+    require_param(weight_different_masks > weight_background, "objects.weight_different_masks",
+                  "must exceed weight_background");
+    require_param(felzenszwalb_k > 0, "objects.felzenszwalb_k", "must be > 0");
+    require_param(min_segment_points >= 1, "objects.min_segment_points", "must be >= 1");
+    require_param(map_voxel_size > 0, "objects.map_voxel_size", "must be > 0");
+    require_param(association_distance > 0, "objects.association_distance", "must be > 0");
+    require_param(overlap_distance > 0, "objects.overlap_distance", "must be > 0");
+    require_param(overlap_ratio >= 0 && overlap_ratio <= 1, "objects.overlap_ratio", "must be in [0, 1]");
+    require_param(optimise_every >= 1, "objects.optimise_every", "must be >= 1");
+    require_param(stable_min_associations >= 0, "objects.stable_min_associations", "must be >= 0");
+    require_param(merge_coassociation >= 0 && merge_coassociation <= 1, "objects.merge_coassociation",
+                  "must be in [0, 1]");
+    require_param(merge_overlap_ratio >= 0 && merge_overlap_ratio <= 1, "objects.merge_overlap_ratio",
+                  "must be in [0, 1]");
+    require_param(merge_max_js >= 0, "objects.merge_max_js", "must be >= 0");
+  }
 };
 
 }  // namespace semap

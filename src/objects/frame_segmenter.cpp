@@ -1,0 +1,181 @@
+#include "objects/frame_segmenter.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+
+#include "core/error.hpp"
+#include "objects/segment_graph.hpp"
+#include "objects/supervoxel_graph.hpp"
+
+namespace semap {
+
+std::vector<double> detection_score_vector(const InstanceDetection& det) {
+  std::vector<double> scores(kNumClasses, 0.0);
+  if (static_cast<int>(det.class_scores.size()) == kNumClasses) {
+    for (int k = 0; k < kNumClasses; ++k) scores[k] = std::max(0.f, det.class_scores[k]);
+  } else if (det.class_id < kNumClasses) {
+    scores[det.class_id] = det.score > 0.f ? det.score : 1.0;
+  }
+  return scores;
+}
+
+FrameSegmenter::FrameSegmenter(const ObjectsConfig& config, const CameraModel& camera)
+    : config_(config), camera_(camera) {
+  config_.validate();
+}
+
+namespace {
+
+struct FrameCloud {
+  std::vector<Eigen::Vector3f> points;  // camera frame
+  std::vector<Rgb8> colours;
+  std::vector<int> mask;                // 1-based detection index, 0 = background
+};
+
+// Per-pixel detection index (1-based) at depth resolution; the higher score wins overlaps.
+std::vector<int> mask_index_image(const SegmentationResult& seg, int width, int height, double min_score) {
+  std::vector<int> index(static_cast<size_t>(width) * height, 0);
+  std::vector<int> order(seg.instances.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int a, int b) { return seg.instances[a].score < seg.instances[b].score; });
+  for (int d : order) {
+    const auto& det = seg.instances[d];
+    if (det.mask.empty() || det.score < min_score || det.class_id == 0 || is_stuff(det.class_id)) continue;
+    if (det.mask.type() != CV_8UC1) throw Error("segmentation", "instance mask must be CV_8UC1");
+    const int mw = det.mask.cols, mh = det.mask.rows;
+    for (int v = 0; v < height; ++v) {
+      const uint8_t* row = det.mask.ptr<uint8_t>(mh == height ? v : v * mh / height);
+      for (int u = 0; u < width; ++u)
+        if (row[mw == width ? u : u * mw / width]) index[static_cast<size_t>(v) * width + u] = d + 1;
+    }
+  }
+  return index;
+}
+
+}  // namespace
+
+std::vector<ObjectSegment> FrameSegmenter::segment(const Frame& frame, const SegmentationResult& seg,
+                                                   const Pose& T_world_camera, FrameSegmentationStats* stats) const {
+  std::vector<ObjectSegment> result;
+  if (frame.depth.empty()) return result;
+  if (frame.depth.type() != CV_32FC1) throw Error(frame.depth_path, "depth must be CV_32FC1 metres");
+  const int width = frame.depth.cols, height = frame.depth.rows;
+  const auto& intr = camera_.depth;
+  const double sx = static_cast<double>(intr.width) / width, sy = static_cast<double>(intr.height) / height;
+  const std::vector<int> mask_index = mask_index_image(seg, width, height, config_.mask_min_score);
+  if (std::none_of(mask_index.begin(), mask_index.end(), [](int m) { return m != 0; })) return result;
+
+  const bool has_rgb = !frame.rgb.empty() && frame.rgb.type() == CV_8UC3;
+  FrameCloud cloud;
+  const int stride = config_.pixel_stride;
+  const bool backprojection = config_.segmentation_mode == "backprojection";
+  for (int v = 0; v < height; v += stride) {
+    const float* drow = frame.depth.ptr<float>(v);
+    for (int u = 0; u < width; u += stride) {
+      const float z = drow[u];
+      if (!(z > 0.f) || z > config_.max_depth) continue;
+      const int m = mask_index[static_cast<size_t>(v) * width + u];
+      if (backprojection && m == 0) continue;
+      cloud.points.push_back(intr.backproject(u * sx, v * sy, z).cast<float>());
+      Rgb8 c;
+      if (has_rgb) {
+        const auto& bgr = frame.rgb.at<cv::Vec3b>(v * frame.rgb.rows / height, u * frame.rgb.cols / width);
+        c = Rgb8{bgr[2], bgr[1], bgr[0]};
+      }
+      cloud.colours.push_back(c);
+      cloud.mask.push_back(m);
+    }
+  }
+  if (stats) stats->cloud_points = cloud.points.size();
+
+  // Which points make the segment of each detection (1-based index -> point indices).
+  std::map<int, std::vector<int>> points_of_detection;
+  if (backprojection) {
+    for (size_t i = 0; i < cloud.points.size(); ++i) points_of_detection[cloud.mask[i]].push_back(static_cast<int>(i));
+  } else {
+    SupervoxelParams sv;
+    sv.voxel_resolution = static_cast<float>(config_.voxel_resolution);
+    sv.seed_resolution = static_cast<float>(config_.seed_resolution);
+    sv.colour_importance = static_cast<float>(config_.colour_importance);
+    sv.spatial_importance = static_cast<float>(config_.spatial_importance);
+    sv.normal_importance = static_cast<float>(config_.normal_importance);
+    SupervoxelGraph graph = build_supervoxel_graph(cloud.points, cloud.colours, sv);
+    const int num_masks = static_cast<int>(seg.instances.size()) + 1;
+    for (auto& node : graph.nodes) {
+      // m_i (C2.3): the mask covering most of the supervoxel's points.
+      std::vector<int> votes(num_masks, 0);
+      for (int p : node.point_indices) ++votes[cloud.mask[p]];
+      node.mask = static_cast<int>(std::max_element(votes.begin(), votes.end()) - votes.begin());
+      // C2.6: the mask at the centre's pixel (the majority when the centre falls outside).
+      node.centre_mask = node.mask;
+      if (node.centroid.z() > 0.f) {
+        const Eigen::Vector2d px = intr.project(node.centroid.cast<double>());
+        const int u = static_cast<int>(std::lround(px.x() / sx)), v = static_cast<int>(std::lround(px.y() / sy));
+        if (u >= 0 && v >= 0 && u < width && v < height) node.centre_mask = mask_index[static_cast<size_t>(v) * width + u];
+      }
+    }
+    SupportPlaneParams plane_params;
+    plane_params.max_curvature = static_cast<float>(config_.plane_max_curvature);
+    plane_params.max_angle_deg = static_cast<float>(config_.plane_max_angle_deg);
+    plane_params.max_distance = static_cast<float>(config_.plane_max_distance);
+    plane_params.min_supervoxels = config_.plane_min_supervoxels;
+    plane_params.min_extent = static_cast<float>(config_.plane_min_extent);
+    const std::vector<int> planes = assign_support_planes(graph, plane_params);
+    for (size_t i = 0; i < graph.nodes.size(); ++i) graph.nodes[i].plane = planes[i];
+    const std::vector<bool> convex = truly_convex_edges(graph, static_cast<float>(config_.convex_sanity_angle_deg));
+    std::vector<WeightedEdge> edges;
+    edges.reserve(graph.edges.size());
+    for (size_t e = 0; e < graph.edges.size(); ++e) {
+      const auto [a, b] = graph.edges[e];
+      const auto& na = graph.nodes[a];
+      const auto& nb = graph.nodes[b];
+      // C2.2: omega = omega_sem + omega_geo.
+      const float w = semantic_weight(na.mask, nb.mask, static_cast<float>(config_.weight_different_masks),
+                                      static_cast<float>(config_.weight_background)) +
+                      geometric_weight(na.plane, nb.plane, na.normal, nb.normal, convex[e]);
+      edges.push_back({a, b, w});
+    }
+    const std::vector<int> component =
+        felzenszwalb_cluster(static_cast<int>(graph.nodes.size()), edges, static_cast<float>(config_.felzenszwalb_k));
+    const int num_components = component.empty() ? 0 : *std::max_element(component.begin(), component.end()) + 1;
+    // C2.6: each quasi-object segment takes the majority centre label of its supervoxels.
+    std::vector<std::vector<int>> votes(num_components, std::vector<int>(num_masks, 0));
+    for (size_t i = 0; i < graph.nodes.size(); ++i) ++votes[component[i]][graph.nodes[i].centre_mask];
+    std::vector<int> component_label(num_components, 0);
+    for (int c = 0; c < num_components; ++c)
+      component_label[c] = static_cast<int>(std::max_element(votes[c].begin(), votes[c].end()) - votes[c].begin());
+    for (size_t i = 0; i < graph.nodes.size(); ++i) {
+      auto& list = points_of_detection[component_label[component[i]]];
+      list.insert(list.end(), graph.nodes[i].point_indices.begin(), graph.nodes[i].point_indices.end());
+    }
+    if (stats) {
+      stats->supervoxels = graph.nodes.size();
+      stats->planes = planes.empty() ? 0 : static_cast<size_t>(*std::max_element(planes.begin(), planes.end()));
+      stats->quasi_segments = static_cast<size_t>(num_components);
+    }
+  }
+
+  const Eigen::Isometry3f T = T_world_camera.cast<float>();
+  for (const auto& [label, indices] : points_of_detection) {
+    if (label == 0 || static_cast<int>(indices.size()) < config_.min_segment_points) continue;
+    const auto& det = seg.instances[label - 1];
+    ObjectSegment segment;
+    segment.class_id = det.class_id;
+    segment.score = det.score;
+    segment.class_scores = detection_score_vector(det);
+    segment.detection = label - 1;
+    segment.points.reserve(indices.size());
+    segment.colours.reserve(indices.size());
+    for (int i : indices) {
+      segment.points.push_back(T * cloud.points[i]);
+      segment.colours.push_back(cloud.colours[i]);
+    }
+    result.push_back(std::move(segment));
+  }
+  return result;
+}
+
+}  // namespace semap

@@ -1,0 +1,262 @@
+#include "objects/object_map.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <nanoflann.hpp>
+#include <numeric>
+
+#include "objects/segment_graph.hpp"
+
+namespace semap {
+
+const char* state_name(InstanceState state) {
+  switch (state) {
+    case InstanceState::kNew: return "new";
+    case InstanceState::kUnstable: return "unstable";
+    case InstanceState::kStable: return "stable";
+  }
+  return "unknown";
+}
+
+// A k-d tree over its own copy of the points (instances move when the map vector grows).
+struct PointKdTree {
+  struct Adaptor {
+    const std::vector<Eigen::Vector3f>* points = nullptr;
+    size_t kdtree_get_point_count() const { return points->size(); }
+    float kdtree_get_pt(size_t i, size_t dim) const { return (*points)[i][static_cast<int>(dim)]; }
+    template <class Box>
+    bool kdtree_get_bbox(Box&) const { return false; }
+  };
+  using Index = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, Adaptor>, Adaptor, 3>;
+
+  explicit PointKdTree(std::vector<Eigen::Vector3f> pts) : points(std::move(pts)) {
+    adaptor.points = &points;
+    index = std::make_unique<Index>(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(10));
+    index->buildIndex();
+  }
+  /// Squared distance to the nearest point (infinity when empty).
+  float nearest_sq(const Eigen::Vector3f& q, size_t* which = nullptr) const {
+    if (points.empty()) return std::numeric_limits<float>::infinity();
+    uint32_t idx = 0;
+    float dist_sq = 0.f;
+    index->knnSearch(q.data(), 1, &idx, &dist_sq);
+    if (which) *which = idx;
+    return dist_sq;
+  }
+  std::vector<Eigen::Vector3f> points;
+  Adaptor adaptor;
+  std::unique_ptr<Index> index;
+};
+
+namespace {
+const PointKdTree& tree_of(const ObjectInstance& instance) {
+  if (!instance.tree) instance.tree = std::make_shared<PointKdTree>(instance.points);
+  return *instance.tree;
+}
+}  // namespace
+
+ClassId ObjectInstance::class_id() const {
+  if (score_sum.empty()) return 0;
+  const auto it = std::max_element(score_sum.begin(), score_sum.end());
+  return *it > 0.0 ? static_cast<ClassId>(it - score_sum.begin()) : 0;
+}
+
+std::vector<double> ObjectInstance::mean_scores() const { return augmented_mean_scores(score_sum, n); }
+
+ObjectMap::ObjectMap(const ObjectsConfig& config) : config_(config) { config_.validate(); }
+
+uint64_t ObjectMap::voxel_key(const Eigen::Vector3f& p) const {
+  const double inv = 1.0 / config_.map_voxel_size;
+  auto cell = [&](float x) { return static_cast<uint64_t>(static_cast<int64_t>(std::floor(x * inv)) + (1 << 20)) & 0x1FFFFF; };
+  return (cell(p.x()) << 42) | (cell(p.y()) << 21) | cell(p.z());
+}
+
+void ObjectMap::add_points(ObjectInstance& instance, const std::vector<Eigen::Vector3f>& points,
+                           const std::vector<Rgb8>& colours) {
+  bool added = false;
+  for (size_t i = 0; i < points.size(); ++i) {
+    const auto [it, inserted] = instance.voxel_to_point.try_emplace(voxel_key(points[i]),
+                                                                    static_cast<uint32_t>(instance.points.size()));
+    if (!inserted) continue;
+    instance.points.push_back(points[i]);
+    instance.colours.push_back(i < colours.size() ? colours[i] : Rgb8{});
+    instance.point_sum += points[i].cast<double>();
+    added = true;
+  }
+  if (added) instance.tree.reset();
+}
+
+double ObjectMap::overlap(const std::vector<Eigen::Vector3f>& query, const ObjectInstance& instance,
+                          double distance) const {
+  if (query.empty() || instance.points.empty()) return 0.0;
+  const PointKdTree& tree = tree_of(instance);
+  const float limit_sq = static_cast<float>(distance * distance);
+  size_t hits = 0;
+  for (const auto& q : query)
+    if (tree.nearest_sq(q) < limit_sq) ++hits;
+  return static_cast<double>(hits) / static_cast<double>(query.size());
+}
+
+void ObjectMap::associate(const std::vector<ObjectSegment>& segments, size_t frame_index, size_t step) {
+  for (const auto& segment : segments) {
+    if (segment.points.empty()) continue;
+    // Downsample the segment to the map's voxels first: bounded cost per segment.
+    std::vector<Eigen::Vector3f> points;
+    std::vector<Rgb8> colours;
+    {
+      std::unordered_map<uint64_t, char> seen;
+      seen.reserve(segment.points.size());
+      for (size_t i = 0; i < segment.points.size(); ++i) {
+        if (!seen.try_emplace(voxel_key(segment.points[i]), 1).second) continue;
+        points.push_back(segment.points[i]);
+        colours.push_back(i < segment.colours.size() ? segment.colours[i] : Rgb8{});
+      }
+    }
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (const auto& p : points) sum += p.cast<double>();
+    const Eigen::Vector3f centroid = (sum / static_cast<double>(points.size())).cast<float>();
+
+    // C4: candidates inside the centroid gate, nearest first.
+    std::vector<std::pair<float, size_t>> candidates;
+    for (size_t j = 0; j < instances_.size(); ++j) {
+      const float d = (instances_[j].centroid() - centroid).norm();
+      if (d < config_.association_distance) candidates.emplace_back(d, j);
+    }
+    std::sort(candidates.begin(), candidates.end());
+    for (size_t a = 0; a < candidates.size(); ++a) {
+      auto& inst = instances_[candidates[a].second];
+      ++inst.association_count;
+      ++inst.total_associations;
+      for (size_t b = 0; b < candidates.size(); ++b)
+        if (a != b) ++inst.co_association[instances_[candidates[b].second].id];
+    }
+    ObjectInstance* target = nullptr;
+    for (const auto& [d, j] : candidates) {
+      if (overlap(points, instances_[j], config_.overlap_distance) > config_.overlap_ratio) {
+        target = &instances_[j];
+        break;
+      }
+    }
+    if (!target) {
+      instances_.emplace_back();
+      target = &instances_.back();
+      target->id = next_id_++;
+      target->score_sum.assign(kNumClasses, 0.0);
+      target->first_frame = frame_index;
+      target->association_count = 1;
+      target->total_associations = 1;
+    }
+    add_points(*target, points, colours);
+    target->n += 1;
+    for (size_t k = 0; k < target->score_sum.size() && k < segment.class_scores.size(); ++k)
+      target->score_sum[k] += segment.class_scores[k];
+    target->last_frame = std::max(target->last_frame, frame_index);
+    target->last_step = step;
+    target->changed = true;
+  }
+}
+
+void ObjectMap::merge_into(ObjectInstance& target, ObjectInstance& source) {
+  add_points(target, source.points, source.colours);
+  target.n += source.n;
+  for (size_t k = 0; k < target.score_sum.size(); ++k) target.score_sum[k] += source.score_sum[k];
+  target.association_count = std::max(target.association_count, source.association_count);
+  target.total_associations += source.total_associations;
+  target.first_frame = std::min(target.first_frame, source.first_frame);
+  target.last_frame = std::max(target.last_frame, source.last_frame);
+  target.last_step = std::max(target.last_step, source.last_step);
+  for (const auto& [id, count] : source.co_association)
+    if (id != target.id) target.co_association[id] = std::max(target.co_association[id], count);
+  target.co_association.erase(source.id);
+  target.changed = true;
+}
+
+OptimisationStats ObjectMap::optimise(size_t step, bool ignore_recency) {
+  OptimisationStats stats;
+  const double T = config_.optimise_every;
+  // NEW / UNSTABLE: promote, delete or keep (C5).
+  std::vector<char> remove(instances_.size(), 0);
+  for (size_t i = 0; i < instances_.size(); ++i) {
+    auto& inst = instances_[i];
+    if (inst.state == InstanceState::kStable) continue;
+    const bool recent = !ignore_recency && step - inst.last_step <= static_cast<size_t>(config_.recent_frames);
+    if (inst.association_count >= config_.stable_min_associations) {
+      inst.state = InstanceState::kStable;
+      ++stats.promoted;
+    } else if (config_.enable_delete && inst.association_count + inst.n < config_.delete_fraction * T && !recent) {
+      remove[i] = 1;
+      ++stats.deleted;
+    } else {
+      inst.state = InstanceState::kUnstable;
+    }
+  }
+  // STABLE pairs: (1) both stable, (2) co-association, then (3) overlap and (4) JS divergence.
+  if (config_.enable_merge) {
+    bool merged_any = true;
+    while (merged_any) {
+      merged_any = false;
+      for (size_t i = 0; i < instances_.size() && !merged_any; ++i) {
+        if (remove[i] || instances_[i].state != InstanceState::kStable) continue;
+        for (size_t j = i + 1; j < instances_.size(); ++j) {
+          auto& a = instances_[i];
+          auto& b = instances_[j];
+          if (remove[j] || b.state != InstanceState::kStable) continue;
+          if (!a.changed && !b.changed) continue;  // only re-check instances whose counts changed
+          const auto co_it = a.co_association.find(b.id);
+          const int co = co_it == a.co_association.end() ? 0 : co_it->second;
+          // (2): "exceeds a fraction of either one's association count" read as: of at least one.
+          const int s_min = std::min(a.association_count, b.association_count);
+          if (co <= 0 || co <= config_.merge_coassociation * s_min) continue;
+          ++stats.pairs_checked;
+          const bool a_smaller = a.points.size() <= b.points.size();
+          const ObjectInstance& small = a_smaller ? a : b;
+          const ObjectInstance& large = a_smaller ? b : a;
+          if (overlap(small.points, large, config_.overlap_distance) < config_.merge_overlap_ratio) continue;
+          if (js_divergence(a.mean_scores(), b.mean_scores()) > config_.merge_max_js) continue;
+          // Keep the instance with more merges (its id is the better established one).
+          if (a.n >= b.n) {
+            merge_into(a, b);
+            remove[j] = 1;
+          } else {
+            merge_into(b, a);
+            remove[i] = 1;
+          }
+          ++stats.merged;
+          merged_any = true;
+          break;
+        }
+      }
+    }
+  }
+  std::vector<ObjectInstance> kept;
+  kept.reserve(instances_.size());
+  for (size_t i = 0; i < instances_.size(); ++i)
+    if (!remove[i]) kept.push_back(std::move(instances_[i]));
+  instances_ = std::move(kept);
+  for (auto& inst : instances_) {
+    inst.association_count = 0;
+    inst.co_association.clear();
+    inst.changed = false;
+  }
+  return stats;
+}
+
+std::vector<uint32_t> ObjectMap::instance_ids_for(const std::vector<Eigen::Vector3f>& points, float max_dist) const {
+  std::vector<uint32_t> ids(points.size(), 0);
+  std::vector<Eigen::Vector3f> all;
+  std::vector<uint32_t> owner;
+  for (const auto& inst : instances_) {
+    all.insert(all.end(), inst.points.begin(), inst.points.end());
+    owner.insert(owner.end(), inst.points.size(), inst.id);
+  }
+  if (all.empty()) return ids;
+  const PointKdTree tree(std::move(all));
+  const float limit_sq = max_dist * max_dist;
+  for (size_t i = 0; i < points.size(); ++i) {
+    size_t which = 0;
+    if (tree.nearest_sq(points[i], &which) <= limit_sq) ids[i] = owner[which];
+  }
+  return ids;
+}
+
+}  // namespace semap

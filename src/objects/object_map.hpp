@@ -1,0 +1,79 @@
+#pragma once
+// The object map (METHODS.md C3), association of frame segments (C4) and the optimisation by
+// association counts (C5).
+#include <Eigen/Core>
+#include <cstdint>
+#include <memory>
+#include <unordered_map>
+#include <vector>
+
+#include "core/labels.hpp"
+#include "objects/frame_segmenter.hpp"
+#include "objects/objects_config.hpp"
+
+namespace semap {
+
+enum class InstanceState { kNew, kUnstable, kStable };
+const char* state_name(InstanceState state);
+
+struct PointKdTree;  // nanoflann index, defined in object_map.cpp
+
+/// o_i = <n_i, c_i, P_i> plus what C5 needs.
+struct ObjectInstance {
+  uint32_t id = 0;
+  int n = 0;                          ///< merge count: segments merged in
+  std::vector<double> score_sum;      ///< c_i, accumulated class scores, size kNumClasses
+  std::vector<Eigen::Vector3f> points;  ///< P_i, world frame, one per occupied map voxel
+  std::vector<Rgb8> colours;
+  Eigen::Vector3d point_sum = Eigen::Vector3d::Zero();
+  int association_count = 0;          ///< s_i since the last optimisation
+  int total_associations = 0;         ///< s_i over the whole run (reporting)
+  std::unordered_map<uint32_t, int> co_association;  ///< co-candidacy with other ids since the last optimisation
+  size_t first_frame = 0, last_frame = 0;  ///< frame indices (reporting)
+  size_t last_step = 0;               ///< process() call that last merged a segment (recency)
+  InstanceState state = InstanceState::kNew;
+  bool changed = true;                ///< merge count changed since the last optimisation
+  std::unordered_map<uint64_t, uint32_t> voxel_to_point;
+  mutable std::shared_ptr<PointKdTree> tree;  ///< rebuilt lazily after points change
+
+  Eigen::Vector3f centroid() const {
+    if (points.empty()) return Eigen::Vector3f::Zero();
+    return (point_sum / static_cast<double>(points.size())).cast<float>();
+  }
+  /// argmax of the accumulated scores (class 0 only when no scores).
+  ClassId class_id() const;
+  /// Augmented mean score vector (C5).
+  std::vector<double> mean_scores() const;
+};
+
+struct OptimisationStats {
+  int promoted = 0, deleted = 0, merged = 0, pairs_checked = 0;
+};
+
+class ObjectMap {
+ public:
+  explicit ObjectMap(const ObjectsConfig& config);
+
+  /// C4: associates each segment with the map (merge or create). `step` counts process() calls.
+  void associate(const std::vector<ObjectSegment>& segments, size_t frame_index, size_t step);
+  /// C5: promote / delete / merge, then reset association counts. `ignore_recency` drops the
+  /// "seen recently" exemption (final pass).
+  OptimisationStats optimise(size_t step, bool ignore_recency);
+
+  const std::vector<ObjectInstance>& instances() const { return instances_; }
+  /// Fraction of `query` points with an instance point closer than `distance` (C4 overlap).
+  double overlap(const std::vector<Eigen::Vector3f>& query, const ObjectInstance& instance, double distance) const;
+  /// Per point: id of the instance with the nearest point within max_dist, else 0.
+  std::vector<uint32_t> instance_ids_for(const std::vector<Eigen::Vector3f>& points, float max_dist) const;
+
+ private:
+  uint64_t voxel_key(const Eigen::Vector3f& p) const;
+  void add_points(ObjectInstance& instance, const std::vector<Eigen::Vector3f>& points, const std::vector<Rgb8>& colours);
+  void merge_into(ObjectInstance& target, ObjectInstance& source);
+
+  ObjectsConfig config_;
+  std::vector<ObjectInstance> instances_;
+  uint32_t next_id_ = 1;
+};
+
+}  // namespace semap

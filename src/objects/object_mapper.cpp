@@ -1,0 +1,130 @@
+#include "objects/object_mapper.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <chrono>
+
+#include "core/error.hpp"
+#include "core/paths.hpp"
+#include "io/ply_io.hpp"
+
+namespace semap {
+
+namespace {
+double ms_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+}  // namespace
+
+ObjectMapper::ObjectMapper(const ObjectsConfig& config, const CameraModel& camera)
+    : config_(config), segmenter_(config, camera), map_(config) {}
+
+void ObjectMapper::process(const Frame& frame, const SegmentationResult& segmentation, const Pose& T_world_camera) {
+  ++step_;
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto segments = segmenter_.segment(frame, segmentation, T_world_camera);
+  timings_.segmentation_ms += ms_since(t0);
+  const auto t1 = std::chrono::steady_clock::now();
+  map_.associate(segments, frame.index, step_);
+  if (config_.enable_optimisation && step_ % static_cast<size_t>(config_.optimise_every) == 0) {
+    optimisation_log_.push_back(map_.optimise(step_, false));
+    ++timings_.optimisations;
+  }
+  timings_.association_ms += ms_since(t1);
+  ++timings_.frames;
+}
+
+void ObjectMapper::finish() {
+  if (finished_) return;
+  finished_ = true;
+  if (config_.enable_optimisation && config_.final_optimisation && step_ % config_.optimise_every != 0) {
+    optimisation_log_.push_back(map_.optimise(step_, true));
+    ++timings_.optimisations;
+  }
+}
+
+OrientedBox fit_oriented_box(const std::vector<Eigen::Vector3f>& points) {
+  OrientedBox box;
+  if (points.empty()) return box;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& p : points) mean += p.cast<double>();
+  mean /= static_cast<double>(points.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const auto& p : points) {
+    const Eigen::Vector3d d = p.cast<double>() - mean;
+    cov += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(cov);
+  Eigen::Matrix3d axes = solver.eigenvectors();
+  if (axes.determinant() < 0) axes.col(0) = -axes.col(0);
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e30), hi = -lo;
+  for (const auto& p : points) {
+    const Eigen::Vector3d local = axes.transpose() * (p.cast<double>() - mean);
+    lo = lo.cwiseMin(local);
+    hi = hi.cwiseMax(local);
+  }
+  box.rotation = axes.cast<float>();
+  box.extent = (hi - lo).cast<float>();
+  box.center = (mean + axes * (0.5 * (lo + hi))).cast<float>();
+  return box;
+}
+
+nlohmann::json ObjectMapper::to_json() const {
+  nlohmann::json objects = nlohmann::json::array();
+  for (const auto& inst : map_.instances()) {
+    if (inst.points.empty()) continue;
+    const ClassId cls = inst.class_id();
+    nlohmann::json distribution = nlohmann::json::object();
+    const auto mean = inst.mean_scores();  // [0] = "other" residual (C5)
+    for (size_t k = 1; k < mean.size(); ++k)
+      if (mean[k] >= 0.005) distribution[std::string(class_name(static_cast<ClassId>(k - 1)))] = mean[k];
+    if (mean[0] >= 0.005) {
+      const std::string other(class_name(id(Label::kOther)));
+      distribution[other] = distribution.value(other, 0.0) + mean[0];
+    }
+    Eigen::Vector3f lo = Eigen::Vector3f::Constant(1e30f), hi = -lo;
+    for (const auto& p : inst.points) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    const OrientedBox obb = fit_oriented_box(inst.points);
+    std::vector<float> rotation;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) rotation.push_back(obb.rotation(r, c));
+    const Eigen::Vector3f centroid = inst.centroid();
+    objects.push_back({{"id", inst.id},
+                       {"class", std::string(class_name(cls))},
+                       {"class_id", cls},
+                       {"class_distribution", distribution},
+                       {"n", inst.n},
+                       {"association_count", inst.total_associations},
+                       {"centroid", {centroid.x(), centroid.y(), centroid.z()}},
+                       {"aabb", {{"min", {lo.x(), lo.y(), lo.z()}}, {"max", {hi.x(), hi.y(), hi.z()}}}},
+                       {"obb",
+                        {{"center", {obb.center.x(), obb.center.y(), obb.center.z()}},
+                         {"extent", {obb.extent.x(), obb.extent.y(), obb.extent.z()}},
+                         {"rotation", rotation}}},
+                       {"point_count", inst.points.size()},
+                       {"points_file", "objects/" + std::to_string(inst.id) + ".ply"},
+                       {"first_seen", inst.first_frame},
+                       {"last_seen", inst.last_frame},
+                       {"state", state_name(inst.state)}});
+  }
+  return {{"objects", objects}};
+}
+
+void ObjectMapper::write(const std::filesystem::path& out_dir) const {
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir / "objects", ec);
+  if (ec) throw Error(out_dir, "cannot create output folder: " + ec.message());
+  for (const auto& inst : map_.instances()) {
+    if (inst.points.empty()) continue;
+    PointCloud cloud;
+    cloud.points = inst.points;
+    cloud.colours = inst.colours;
+    const auto path = out_dir / "objects" / (std::to_string(inst.id) + ".ply");
+    write_atomic_with(path, [&](const std::filesystem::path& tmp) { write_ply(tmp, cloud); });
+  }
+  write_file_atomic(out_dir / "objects.json", to_json().dump(2) + "\n");
+}
+
+}  // namespace semap

@@ -1,0 +1,64 @@
+#pragma once
+// The object-oriented map of seed 000 (METHODS.md C2-C5): per keyframe, mask-guided segments
+// are associated with the map; every T frames the map is optimised by association counts.
+#include <Eigen/Core>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <vector>
+
+#include "core/camera.hpp"
+#include "core/frame.hpp"
+#include "objects/frame_segmenter.hpp"
+#include "objects/object_map.hpp"
+#include "objects/objects_config.hpp"
+#include "segmentation/segmenter.hpp"
+
+namespace semap {
+
+struct ObjectMapperTimings {
+  double segmentation_ms = 0.0;  ///< C2, summed over process() calls
+  double association_ms = 0.0;   ///< C4 + C5, summed
+  size_t frames = 0;
+  size_t optimisations = 0;
+};
+
+class ObjectMapper {
+ public:
+  ObjectMapper(const ObjectsConfig& config, const CameraModel& camera);
+  /// One keyframe: C2 segments -> C4 association; C5 every optimise_every calls.
+  void process(const Frame& frame, const SegmentationResult& segmentation, const Pose& T_world_camera);
+  /// Final C5 pass (config final_optimisation). Call once after the last frame.
+  void finish();
+  /// objects.json + objects/<id>.ply (schema in SHARED_FORMATS.md), written atomically.
+  void write(const std::filesystem::path& out_dir) const;
+  /// The objects.json document.
+  nlohmann::json to_json() const;
+
+  const std::vector<ObjectInstance>& instances() const { return map_.instances(); }
+  const ObjectMap& map() const { return map_; }
+  /// Per point: id of the object with a point within max_dist (metres), else 0 (mesh labelling).
+  std::vector<uint32_t> instance_ids_for(const std::vector<Eigen::Vector3f>& points, float max_dist) const {
+    return map_.instance_ids_for(points, max_dist);
+  }
+  const ObjectMapperTimings& timings() const { return timings_; }
+  const std::vector<OptimisationStats>& optimisation_log() const { return optimisation_log_; }
+
+ private:
+  ObjectsConfig config_;
+  FrameSegmenter segmenter_;
+  ObjectMap map_;
+  size_t step_ = 0;
+  ObjectMapperTimings timings_;
+  std::vector<OptimisationStats> optimisation_log_;
+  bool finished_ = false;
+};
+
+/// Oriented box of a point set by PCA: centre, full side lengths, world_from_box rotation.
+struct OrientedBox {
+  Eigen::Vector3f center = Eigen::Vector3f::Zero();
+  Eigen::Vector3f extent = Eigen::Vector3f::Zero();
+  Eigen::Matrix3f rotation = Eigen::Matrix3f::Identity();
+};
+OrientedBox fit_oriented_box(const std::vector<Eigen::Vector3f>& points);
+
+}  // namespace semap

@@ -1,0 +1,249 @@
+// Unit tests of METHODS.md C2.3-C2.5 (weights, convexity, planes, clustering) and C4-C5
+// (association, deletion, merging, JS divergence).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "objects/object_map.hpp"
+#include "objects/segment_graph.hpp"
+
+using namespace semap;
+
+TEST(ObjectsGraph, FelzenszwalbSeparatesTwoCliques) {
+  // Two triangles of tight edges joined by one heavy edge.
+  std::vector<WeightedEdge> edges = {{0, 1, 0.1f}, {1, 2, 0.1f}, {0, 2, 0.2f}, {3, 4, 0.1f},
+                                     {4, 5, 0.1f}, {3, 5, 0.1f}, {2, 3, 3.0f}};
+  const auto comp = felzenszwalb_cluster(6, edges, 2.f);
+  EXPECT_EQ(comp[0], comp[1]);
+  EXPECT_EQ(comp[1], comp[2]);
+  EXPECT_EQ(comp[3], comp[4]);
+  EXPECT_EQ(comp[4], comp[5]);
+  EXPECT_NE(comp[0], comp[3]);
+  // A huge K merges everything; K -> 0 merges only zero-weight edges.
+  const auto one = felzenszwalb_cluster(6, edges, 100.f);
+  for (int c : one) EXPECT_EQ(c, one[0]);
+  const auto none = felzenszwalb_cluster(6, edges, 1e-6f);
+  std::set<int> distinct(none.begin(), none.end());
+  EXPECT_EQ(distinct.size(), 6u);
+}
+
+TEST(ObjectsGraph, FelzenszwalbRespectsInternalDifference) {
+  // Singletons merge at weight 1.5 (K/1 = 2), but the 4-node chain (Int 1.5, K/4 = 0.5)
+  // refuses a weight-2.5 edge to a new singleton... while accepting 1.9.
+  std::vector<WeightedEdge> edges = {{0, 1, 1.5f}, {1, 2, 1.5f}, {2, 3, 1.5f}, {3, 4, 2.5f}, {0, 5, 1.9f}};
+  const auto comp = felzenszwalb_cluster(6, edges, 2.f);
+  EXPECT_EQ(comp[0], comp[3]);
+  EXPECT_NE(comp[3], comp[4]);
+  EXPECT_EQ(comp[0], comp[5]);
+}
+
+TEST(ObjectsGraph, SemanticWeightTable) {
+  EXPECT_FLOAT_EQ(semantic_weight(3, 3, 3.f, 1.f), 0.f);
+  EXPECT_FLOAT_EQ(semantic_weight(3, 4, 3.f, 1.f), 3.f);
+  EXPECT_FLOAT_EQ(semantic_weight(0, 4, 3.f, 1.f), 1.f);
+  EXPECT_FLOAT_EQ(semantic_weight(4, 0, 3.f, 1.f), 1.f);
+  EXPECT_FLOAT_EQ(semantic_weight(0, 0, 3.f, 1.f), 1.f);
+}
+
+TEST(ObjectsGraph, GeometricWeightTable) {
+  const Eigen::Vector3f up(0, 0, 1), tilted = Eigen::Vector3f(1, 0, 1).normalized();
+  EXPECT_FLOAT_EQ(geometric_weight(2, 2, up, tilted, false), 0.f);
+  EXPECT_FLOAT_EQ(geometric_weight(0, 0, up, tilted, false), 0.f);  // as printed in C2.4
+  EXPECT_FLOAT_EQ(geometric_weight(0, 1, up, tilted, true), 1.f);
+  EXPECT_FLOAT_EQ(geometric_weight(1, 0, up, tilted, false), 1.f);
+  const float d = 1.f - up.dot(tilted);
+  EXPECT_NEAR(geometric_weight(1, 2, up, tilted, true), 0.25f * d * d, 1e-6f);
+  EXPECT_NEAR(geometric_weight(1, 2, up, tilted, false), d, 1e-6f);
+  EXPECT_LT(geometric_weight(1, 2, up, tilted, true), geometric_weight(1, 2, up, tilted, false));
+}
+
+TEST(ObjectsGraph, ConvexityOfRidgeAndValley) {
+  const Eigen::Vector3f ci(-0.5f, 0, 0), cj(0.5f, 0, 0);
+  const Eigen::Vector3f ridge_i = Eigen::Vector3f(-1, 0, 1).normalized(), ridge_j = Eigen::Vector3f(1, 0, 1).normalized();
+  EXPECT_TRUE(generally_convex(ci, ridge_i, cj, ridge_j));
+  EXPECT_FALSE(generally_convex(ci, ridge_j, cj, ridge_i));  // valley
+  // Sanity: d along n_i x n_j (a step seen edge-on) fails, d perpendicular passes.
+  EXPECT_TRUE(passes_sanity_criterion(ci, ridge_i, cj, ridge_j, 60.f));
+  const Eigen::Vector3f s = ridge_i.cross(ridge_j).normalized();
+  EXPECT_FALSE(passes_sanity_criterion(Eigen::Vector3f::Zero(), ridge_i, s, ridge_j, 60.f));
+}
+
+TEST(ObjectsGraph, TrulyConvexNeedsCommonNeighbour) {
+  // Roof ridge: 0 and 1 on the two roof faces, 2 on top of the ridge; all pairs convex.
+  SupervoxelGraph g;
+  g.nodes.resize(4);
+  g.nodes[0].centroid = {-0.5f, 0, 0};
+  g.nodes[0].normal = Eigen::Vector3f(-1, 0, 1).normalized();
+  g.nodes[1].centroid = {0.5f, 0, 0};
+  g.nodes[1].normal = Eigen::Vector3f(1, 0, 1).normalized();
+  g.nodes[2].centroid = {0, 0.1f, 0.3f};
+  g.nodes[2].normal = Eigen::Vector3f(0, 0, 1);
+  g.nodes[3].centroid = {1.5f, 0, 0};
+  g.nodes[3].normal = Eigen::Vector3f(0, 0, 1);
+  g.edges = {{0, 1}, {0, 2}, {1, 2}, {1, 3}};
+  const auto convex = truly_convex_edges(g, 60.f);
+  EXPECT_TRUE(convex[0]);   // 0-1 has the common convex neighbour 2
+  EXPECT_FALSE(convex[3]);  // 1-3 has no common neighbour
+}
+
+TEST(ObjectsGraph, SupportPlaneRegionGrowing) {
+  // A 6x6 grid of flat supervoxels on z = 0 plus a curved blob on top: one plane.
+  SupervoxelGraph g;
+  for (int y = 0; y < 6; ++y)
+    for (int x = 0; x < 6; ++x) {
+      SupervoxelNode n;
+      n.centroid = {x * 0.1f, y * 0.1f, 0.f};
+      n.normal = {0, 0, 1};
+      n.curvature = 0.001f;
+      g.nodes.push_back(n);
+    }
+  for (int y = 0; y < 6; ++y)
+    for (int x = 0; x < 6; ++x) {
+      if (x + 1 < 6) g.edges.emplace_back(y * 6 + x, y * 6 + x + 1);
+      if (y + 1 < 6) g.edges.emplace_back(y * 6 + x, (y + 1) * 6 + x);
+    }
+  SupervoxelNode blob;
+  blob.centroid = {0.25f, 0.25f, 0.1f};
+  blob.normal = Eigen::Vector3f(1, 0, 1).normalized();
+  blob.curvature = 0.2f;
+  g.nodes.push_back(blob);
+  g.edges.emplace_back(14, 36);
+  const auto planes = assign_support_planes(g, SupportPlaneParams{});
+  for (int i = 0; i < 36; ++i) EXPECT_EQ(planes[i], 1);
+  EXPECT_EQ(planes[36], 0);
+}
+
+TEST(ObjectsScores, JensenShannonValues) {
+  EXPECT_NEAR(js_divergence({0.5, 0.5}, {0.5, 0.5}), 0.0, 1e-12);
+  EXPECT_NEAR(js_divergence({1.0, 0.0}, {0.0, 1.0}), std::log(2.0), 1e-12);
+  // p = (1, 0), q = (0.5, 0.5): m = (0.75, 0.25);
+  // JS = 0.5 ln(1/0.75) + 0.5 (0.5 ln(0.5/0.75) + 0.5 ln(0.5/0.25)).
+  const double expected = 0.5 * std::log(1 / 0.75) + 0.5 * (0.5 * std::log(0.5 / 0.75) + 0.5 * std::log(2.0));
+  EXPECT_NEAR(js_divergence({1.0, 0.0}, {0.5, 0.5}), expected, 1e-12);
+  const auto aug = augmented_mean_scores({0.0, 1.2, 0.4}, 2);  // n = 2: means 0.6, 0.2
+  ASSERT_EQ(aug.size(), 4u);
+  EXPECT_NEAR(aug[0], 0.2, 1e-12);
+  EXPECT_NEAR(aug[2], 0.6, 1e-12);
+  EXPECT_NEAR(aug[3], 0.2, 1e-12);
+}
+
+namespace {
+ObjectSegment cube_segment(const Eigen::Vector3f& corner, float size, ClassId cls, float step = 0.01f) {
+  ObjectSegment s;
+  for (float x = 0; x < size; x += step)
+    for (float y = 0; y < size; y += step)
+      for (float z = 0; z < size; z += step)
+        if (x == 0 || y == 0 || z == 0 || x + step >= size || y + step >= size || z + step >= size)
+          s.points.push_back(corner + Eigen::Vector3f(x, y, z));
+  s.colours.assign(s.points.size(), Rgb8{});
+  s.class_id = cls;
+  s.score = 1.f;
+  s.class_scores.assign(kNumClasses, 0.0);
+  s.class_scores[cls] = 1.0;
+  return s;
+}
+ObjectsConfig toy_config() {
+  ObjectsConfig c;
+  c.optimise_every = 50;
+  return c;
+}
+}  // namespace
+
+TEST(ObjectsMap, AssociationMergesOrCreates) {
+  ObjectMap map(toy_config());
+  const ClassId cup = id(Label::kCup);
+  map.associate({cube_segment({0, 0, 0}, 0.1f, cup)}, 0, 1);
+  ASSERT_EQ(map.instances().size(), 1u);
+  // Same cube shifted by 4 mm: overlap ~1 > 0.5 -> merged.
+  map.associate({cube_segment({0.004f, 0, 0}, 0.1f, cup)}, 1, 2);
+  ASSERT_EQ(map.instances().size(), 1u);
+  EXPECT_EQ(map.instances()[0].n, 2);
+  // A cube 0.3 m away: inside the 1 m gate but no overlap -> new instance, both counted.
+  map.associate({cube_segment({0.3f, 0, 0}, 0.1f, cup)}, 2, 3);
+  ASSERT_EQ(map.instances().size(), 2u);
+  EXPECT_EQ(map.instances()[0].association_count, 3);
+  // A cube 3 m away: outside the gate -> new instance, the first one not counted.
+  map.associate({cube_segment({3.f, 0, 0}, 0.1f, cup)}, 3, 4);
+  ASSERT_EQ(map.instances().size(), 3u);
+  EXPECT_EQ(map.instances()[0].association_count, 3);
+  // Voxel downsampling keeps memory bounded: repeated merging does not grow the point set.
+  const size_t before = map.instances()[0].points.size();
+  for (int i = 0; i < 5; ++i) map.associate({cube_segment({0, 0, 0}, 0.1f, cup)}, 5 + i, 5 + i);
+  EXPECT_LE(map.instances()[0].points.size(), before + before / 10);
+  // Co-candidacy counted for the pair (cube at 0 and cube at 0.3 m).
+  const auto& first = map.instances()[0];
+  EXPECT_GE(first.co_association.at(map.instances()[1].id), 1);
+}
+
+TEST(ObjectsMap, DeletionRule) {
+  ObjectsConfig c = toy_config();  // T = 50: delete when s + n < 5 and unseen for > 10 steps
+  ObjectMap map(c);
+  const ClassId cup = id(Label::kCup), chair = id(Label::kChair);
+  for (int i = 0; i < 8; ++i) map.associate({cube_segment({0, 0, 0}, 0.1f, cup)}, i, i + 1);  // s = 8, n = 8
+  map.associate({cube_segment({2, 0, 0}, 0.1f, chair)}, 8, 9);    // s = 1, n = 1, old
+  map.associate({cube_segment({5, 0, 0}, 0.1f, chair)}, 45, 45);  // s = 1, n = 1, recent
+  const auto stats = map.optimise(50, false);
+  EXPECT_EQ(stats.deleted, 1);
+  ASSERT_EQ(map.instances().size(), 2u);
+  EXPECT_EQ(map.instances()[0].state, InstanceState::kStable);
+  EXPECT_EQ(map.instances()[1].state, InstanceState::kUnstable);
+  EXPECT_EQ(map.instances()[0].association_count, 0);  // reset after optimisation
+  // Final pass ignores recency: the recent rare one goes.
+  map.optimise(60, true);
+  EXPECT_EQ(map.instances().size(), 1u);
+}
+
+TEST(ObjectsMap, MergeRuleNeedsCoAssociationOverlapAndSimilarLabels) {
+  ObjectsConfig c = toy_config();
+  c.overlap_ratio = 0.95;  // force duplicates: partial views do not associate
+  const ClassId cup = id(Label::kCup), bowl = id(Label::kBowl);
+  auto run = [&](ClassId second_class) {
+    ObjectMap map(c);
+    // Two duplicate instances of one 20 cm box: A is the full box, B its left 60 %; seen together.
+    for (int i = 0; i < 6; ++i) {
+      ObjectSegment full = cube_segment({0, 0, 0}, 0.2f, cup);
+      ObjectSegment part = cube_segment({0, 0, 0}, 0.2f, second_class);
+      std::vector<Eigen::Vector3f> kept;
+      for (const auto& p : part.points)
+        if (p.x() < 0.12f) kept.push_back(p);
+      part.points = kept;
+      part.colours.assign(kept.size(), Rgb8{});
+      map.associate({part}, i, i + 1);  // part first, so the full view does not fold into it
+      map.associate({full}, i, i + 1);
+    }
+    return map;
+  };
+  {
+    ObjectMap map = run(cup);
+    ASSERT_EQ(map.instances().size(), 2u);  // duplicates before optimisation
+    const auto stats = map.optimise(50, false);
+    EXPECT_EQ(stats.merged, 1);
+    ASSERT_EQ(map.instances().size(), 1u);
+    EXPECT_EQ(map.instances()[0].n, 12);
+  }
+  {
+    ObjectMap map = run(bowl);  // different labels: JS = ln 2 > threshold -> kept apart
+    ASSERT_EQ(map.instances().size(), 2u);
+    const auto stats = map.optimise(50, false);
+    EXPECT_EQ(stats.merged, 0);
+    EXPECT_EQ(map.instances().size(), 2u);
+  }
+  {
+    // Far apart (no overlap) with the same label -> kept apart.
+    ObjectMap map(c);
+    for (int i = 0; i < 6; ++i)
+      map.associate({cube_segment({0, 0, 0}, 0.2f, cup), cube_segment({0.5f, 0, 0}, 0.2f, cup)}, i, i + 1);
+    ASSERT_EQ(map.instances().size(), 2u);
+    EXPECT_EQ(map.optimise(50, false).merged, 0);
+  }
+}
+
+TEST(ObjectsMap, InstanceIdsForPoints) {
+  ObjectMap map(toy_config());
+  map.associate({cube_segment({0, 0, 0}, 0.1f, id(Label::kCup)), cube_segment({1, 0, 0}, 0.1f, id(Label::kBowl))}, 0, 1);
+  const auto ids = map.instance_ids_for({{0.05f, 0.05f, 0.0f}, {1.05f, 0.0f, 0.05f}, {0.5f, 0.5f, 0.5f}}, 0.02f);
+  EXPECT_EQ(ids[0], map.instances()[0].id);
+  EXPECT_EQ(ids[1], map.instances()[1].id);
+  EXPECT_EQ(ids[2], 0u);
+}
