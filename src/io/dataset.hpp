@@ -9,6 +9,7 @@
 
 #include "core/camera.hpp"
 #include "core/frame.hpp"
+#include "core/labels.hpp"
 
 namespace semap {
 
@@ -46,5 +47,17 @@ class DatasetReader {
 /// Detects the layout of `root` (dataset.yaml beside the data wins) and opens it. Throws
 /// semap::Error naming the folder when it is missing or no layout matches.
 std::unique_ptr<DatasetReader> open_dataset(const std::filesystem::path& root);
+
+struct DatasetOptions {
+  /// Synthetic layout: read label_noisy.txt / instance_noisy.txt instead of the clean lists.
+  bool noisy_labels = false;
+};
+std::unique_ptr<DatasetReader> open_dataset(const std::filesystem::path& root, const DatasetOptions& options);
+
+/// TUM RGB-D intrinsic presets (freiburg 1, 2 or 3), 640x480, depth scale 5000.
+CameraModel tum_camera_preset(int freiburg);
+/// YCB-Video object id (1..21) -> project class (mug -> cup, boxes/bricks -> box, bottles ->
+/// bottle, bowl -> bowl, cans/tools/fruit -> other); 0 -> unlabelled.
+ClassId ycb_to_project_class(int ycb_id);
 
 }  // namespace semap

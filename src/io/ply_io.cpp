@@ -267,8 +267,10 @@ void write_ply(const std::filesystem::path& path, const TriangleMesh& mesh) {
 }
 
 TriangleMesh read_ply(const std::filesystem::path& file) {
-  const std::string path = file.string();
-  const std::string bytes = io_detail::read_file_bytes(file);
+  return parse_ply(io_detail::read_file_bytes(file), file.string());
+}
+
+TriangleMesh parse_ply(const std::string& bytes, const std::string& path) {
   const Header header = parse_header(path, bytes);
   DataCursor cursor(path, std::string_view(bytes).substr(header.data_offset), header.format);
 

@@ -3,6 +3,7 @@
 // optional nx ny nz, red green blue (uchar), label (uchar, project class id), instance (uint).
 // Writes binary little endian; reads binary little endian and ASCII (Open3D/MeshLab/PCL files).
 #include <filesystem>
+#include <string>
 
 #include "core/point_cloud.hpp"
 
@@ -13,5 +14,7 @@ void write_ply(const std::filesystem::path& path, const TriangleMesh& mesh);
 /// Reads vertices (and faces, if any). Throws semap::Error naming the file for malformed
 /// headers, truncated data, unsupported formats.
 TriangleMesh read_ply(const std::filesystem::path& path);
+/// Same, from the file's bytes in memory (`source` names it in messages; fuzz targets use it).
+TriangleMesh parse_ply(const std::string& bytes, const std::string& source);
 
 }  // namespace semap

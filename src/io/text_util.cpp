@@ -50,6 +50,20 @@ bool is_blank_or_comment(std::string_view line) {
   return true;
 }
 
+std::vector<double> read_numbers(const std::filesystem::path& path) {
+  const std::string text = read_file_bytes(path);
+  std::vector<double> numbers;
+  for_each_line(text, [&](std::string_view line, size_t line_no) {
+    if (is_blank_or_comment(line)) return;
+    for (auto f : split_fields(line)) {
+      const auto v = parse_double(f);
+      if (!v) throw Error(where(path.string(), line_no), "malformed number '" + std::string(f.substr(0, 40)) + "'");
+      numbers.push_back(*v);
+    }
+  });
+  return numbers;
+}
+
 std::string where(const std::string& source, size_t line_no) {
   return source + ":" + std::to_string(line_no);
 }

@@ -27,6 +27,9 @@ void for_each_line(std::string_view text, F&& fn) {
     start = end + 1;
   }
 }
+/// Every number in a text file (whitespace/comma separated, '#' comments skipped). Throws
+/// naming FILE:LINE for a malformed token; NaN/Inf are returned (callers decide).
+std::vector<double> read_numbers(const std::filesystem::path& path);
 /// "FILE:LINE" for messages.
 std::string where(const std::string& source, size_t line_no);
 

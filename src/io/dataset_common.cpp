@@ -1,0 +1,191 @@
+// Helpers shared by the dataset layouts: TUM-style lists, ground-truth lookup, dataset.yaml.
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.hpp"
+#include "io/association.hpp"
+#include "io/dataset_layouts.hpp"
+#include "io/text_util.hpp"
+
+namespace semap::io_detail {
+
+namespace fs = std::filesystem;
+
+std::vector<ListEntry> read_list(const fs::path& path, size_t min_fields) {
+  if (!fs::exists(path)) throw Error(path, "list file not found");
+  const std::string text = read_file_bytes(path);
+  const std::string source = path.string();
+  std::vector<ListEntry> entries;
+  for_each_line(text, [&](std::string_view line, size_t line_no) {
+    if (is_blank_or_comment(line)) return;
+    const auto fields = split_fields(line);
+    if (fields.size() < 1 + min_fields)
+      throw Error(where(source, line_no), "expected 'timestamp' and " + std::to_string(min_fields) + " more field(s)");
+    const auto t = parse_double(fields[0]);
+    if (!t) throw Error(where(source, line_no), "malformed timestamp '" + std::string(fields[0]) + "'");
+    if (!std::isfinite(*t)) throw Error(where(source, line_no), "NaN or Inf timestamp");
+    if (!entries.empty() && *t <= entries.back().timestamp)
+      throw Error(where(source, line_no), *t == entries.back().timestamp ? "duplicate timestamp" : "timestamp not increasing");
+    ListEntry e{*t, {}, line_no};
+    for (size_t k = 1; k < fields.size(); ++k) e.fields.emplace_back(fields[k]);
+    entries.push_back(std::move(e));
+  });
+  return entries;
+}
+
+fs::path listed_file(const fs::path& list, const ListEntry& entry, size_t field) {
+  const fs::path file = list.parent_path() / entry.fields.at(field);
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec))
+    throw Error(where(list.string(), entry.line), "listed image " + file.string() + " not found");
+  return file;
+}
+
+std::optional<Pose> pose_at(const Trajectory& trajectory, double t, double max_dt) {
+  const auto next = std::lower_bound(trajectory.begin(), trajectory.end(), t,
+                                     [](const StampedPose& p, double s) { return p.timestamp < s; });
+  const bool has_next = next != trajectory.end() && next->timestamp - t <= max_dt;
+  const bool has_prev = next != trajectory.begin() && t - std::prev(next)->timestamp <= max_dt;
+  if (has_next && next->timestamp == t) return next->T_world_camera;
+  if (has_next && has_prev) {
+    const StampedPose& a = *std::prev(next);
+    const StampedPose& b = *next;
+    const double s = (t - a.timestamp) / (b.timestamp - a.timestamp);
+    Pose pose = Pose::Identity();
+    pose.linear() = Eigen::Quaterniond(a.T_world_camera.linear())
+                        .slerp(s, Eigen::Quaterniond(b.T_world_camera.linear()))
+                        .normalized()
+                        .toRotationMatrix();
+    pose.translation() = (1 - s) * a.T_world_camera.translation() + s * b.T_world_camera.translation();
+    return pose;
+  }
+  if (has_next) return next->T_world_camera;
+  if (has_prev) return std::prev(next)->T_world_camera;
+  return std::nullopt;
+}
+
+Pose pose_from_rows(const std::vector<double>& m, const std::string& where) {
+  if (m.size() != 12 && m.size() != 16) throw Error(where, "expected a 3x4 or 4x4 matrix");
+  Pose pose = Pose::Identity();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 4; ++c) pose.matrix()(r, c) = m[r * 4 + c];
+  // Stored rotations have ~7 digits; larger errors mean the file is not a rigid transform.
+  if (!is_valid_pose(pose, 1e-3)) throw Error(where, "matrix is not a rigid transform (rotation not orthonormal)");
+  return orthonormalized(pose);
+}
+
+std::optional<Pose> read_matrix_pose(const fs::path& path) {
+  const std::vector<double> m = read_numbers(path);
+  if (m.size() == 16 || m.size() == 12)
+    for (double v : m)
+      if (!std::isfinite(v)) return std::nullopt;  // 7-Scenes marks unknown poses with inf
+  return pose_from_rows(m, path.string());
+}
+
+std::vector<FrameRecord> associate_lists(const fs::path& rgb_list, const fs::path& depth_list) {
+  const auto rgb = read_list(rgb_list), depth = read_list(depth_list);
+  // Every listed image must exist, associated or not: a list naming absent files is broken.
+  std::vector<double> rgb_t, depth_t;
+  std::vector<fs::path> rgb_files, depth_files;
+  for (const auto& e : rgb) rgb_t.push_back(e.timestamp), rgb_files.push_back(listed_file(rgb_list, e, 0));
+  for (const auto& e : depth) depth_t.push_back(e.timestamp), depth_files.push_back(listed_file(depth_list, e, 0));
+  std::vector<FrameRecord> records;
+  for (const auto& [i, j] : associate_timestamps(rgb_t, depth_t, kMaxTimeDifference)) {
+    FrameRecord r;
+    r.timestamp = rgb[i].timestamp;
+    r.rgb = rgb_files[i];
+    r.depth = depth_files[j];
+    records.push_back(std::move(r));
+  }
+  return records;
+}
+
+void attach_ground_truth(std::vector<FrameRecord>& records, const Trajectory& trajectory) {
+  for (auto& r : records) r.gt_T_world_camera = pose_at(trajectory, r.timestamp);
+}
+
+// ------------------------------------------------------------------ dataset.yaml
+
+DatasetYaml read_dataset_yaml(const fs::path& file) {
+  DatasetYaml yaml;
+  yaml.file = file;
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(file.string());
+  } catch (const YAML::Exception& e) {
+    throw Error(file, std::string("malformed YAML: ") + e.what());
+  }
+  if (!root.IsMap()) throw Error(file, "expected a map with 'format' and 'camera'");
+  for (const auto& kv : root) {
+    const std::string key = kv.first.as<std::string>();
+    if (key == "format") {
+      if (!kv.second.IsScalar()) throw Error(file, "'format' must be a string");
+      yaml.format = kv.second.as<std::string>();
+    } else if (key == "camera") {
+      if (!kv.second.IsMap()) throw Error(file, "'camera' must be a map");
+      yaml.camera = kv.second;
+    } else if (key != "name" && key != "description" && key != "generator") {
+      throw Error(file, "unknown key '" + key + "'");
+    }
+  }
+  return yaml;
+}
+
+namespace {
+
+double yaml_number(const YAML::Node& node, const std::string& file, const std::string& key) {
+  try {
+    const double v = node.as<double>();
+    if (std::isfinite(v)) return v;
+  } catch (const YAML::Exception&) {
+  }
+  throw Error(file, "'" + key + "' must be a finite number");
+}
+
+void apply_intrinsics(const YAML::Node& map, const std::string& file, const std::string& prefix,
+                      PinholeIntrinsics& k, double* depth_scale, Pose* T_depth_colour, bool* has_colour) {
+  for (const auto& kv : map) {
+    const std::string key = kv.first.as<std::string>();
+    const std::string full = prefix + key;
+    if (key == "fx") k.fx = yaml_number(kv.second, file, full);
+    else if (key == "fy") k.fy = yaml_number(kv.second, file, full);
+    else if (key == "cx") k.cx = yaml_number(kv.second, file, full);
+    else if (key == "cy") k.cy = yaml_number(kv.second, file, full);
+    else if (key == "width") k.width = static_cast<int>(yaml_number(kv.second, file, full));
+    else if (key == "height") k.height = static_cast<int>(yaml_number(kv.second, file, full));
+    else if (key == "depth_scale" && depth_scale) *depth_scale = yaml_number(kv.second, file, full);
+    else if (key == "T_depth_colour" && T_depth_colour) {
+      if (!kv.second.IsSequence() || kv.second.size() != 16) throw Error(file, "'" + full + "' must list 16 numbers");
+      std::vector<double> m;
+      for (const auto& v : kv.second) m.push_back(yaml_number(v, file, full));
+      *T_depth_colour = pose_from_rows(m, file + ": " + full);
+    } else if (key == "colour" && has_colour) {
+      if (!kv.second.IsMap()) throw Error(file, "'" + full + "' must be a map");
+      *has_colour = true;
+    } else {
+      throw Error(file, "unknown key '" + full + "'");
+    }
+  }
+  if (!(k.fx > 0 && k.fy > 0)) throw Error(file, "'" + prefix + "fx/fy' must be positive");
+  if (k.width <= 0 || k.height <= 0 || k.width > 16384 || k.height > 16384)
+    throw Error(file, "'" + prefix + "width/height' must be in 1..16384");
+}
+
+}  // namespace
+
+void apply_yaml_camera(const DatasetYaml* yaml, CameraModel& camera) {
+  if (!yaml || !yaml->camera) return;
+  const std::string file = yaml->file.string();
+  bool has_colour = false;
+  apply_intrinsics(yaml->camera, file, "camera.", camera.depth, &camera.depth_scale, nullptr, &has_colour);
+  if (!(camera.depth_scale > 0)) throw Error(file, "'camera.depth_scale' must be positive");
+  if (has_colour) {
+    CameraModel::ColourCamera colour;
+    colour.intrinsics = camera.depth;  // unspecified keys default to the depth camera's
+    apply_intrinsics(yaml->camera["colour"], file, "camera.colour.", colour.intrinsics, nullptr,
+                     &colour.T_depth_colour, nullptr);
+    camera.colour = colour;
+  }
+}
+
+}  // namespace semap::io_detail

@@ -1,0 +1,77 @@
+#pragma once
+// Internal to io/: the per-layout readers behind open_dataset() and their shared helpers.
+#include <yaml-cpp/yaml.h>
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "io/dataset.hpp"
+
+namespace semap::io_detail {
+
+/// Ground-truth poses are matched to frame timestamps within this gap (TUM convention).
+constexpr double kMaxTimeDifference = 0.02;
+
+/// One line of a TUM-style list: "timestamp field...".
+struct ListEntry {
+  double timestamp = 0.0;
+  std::vector<std::string> fields;
+  size_t line = 0;
+};
+/// Reads a list file; errors name the file and line (malformed, non-finite, duplicate or
+/// decreasing timestamps, fewer than `min_fields` fields after the timestamp).
+std::vector<ListEntry> read_list(const std::filesystem::path& path, size_t min_fields = 1);
+/// root / relative (absolute paths stay); throws naming the list and line when the file is absent.
+std::filesystem::path listed_file(const std::filesystem::path& list, const ListEntry& entry, size_t field);
+
+/// Pose at time t: interpolated between the bracketing poses when both are within max_dt,
+/// else the nearest within max_dt, else nullopt.
+std::optional<Pose> pose_at(const Trajectory& trajectory, double t, double max_dt = kMaxTimeDifference);
+/// 4x4 (or 3x4) row-major matrix text -> rigid pose. nullopt for non-finite values (unknown pose);
+/// throws naming the file when malformed or not a rotation.
+std::optional<Pose> read_matrix_pose(const std::filesystem::path& path);
+/// Rigid pose from 12 or 16 row-major numbers; throws Error(where) when not a rotation.
+Pose pose_from_rows(const std::vector<double>& m, const std::string& where);
+
+/// dataset.yaml: optional format and camera overrides.
+struct DatasetYaml {
+  std::filesystem::path file;
+  std::string format;  ///< empty = detect from the layout
+  YAML::Node camera;   ///< may be null
+};
+DatasetYaml read_dataset_yaml(const std::filesystem::path& file);
+/// Applies the yaml camera keys (the rest keep the layout's defaults) and validates.
+void apply_yaml_camera(const DatasetYaml* yaml, CameraModel& camera);
+
+/// A reader of any layout once its records are known.
+class LayoutDataset : public DatasetReader {
+ public:
+  LayoutDataset(std::string format, std::filesystem::path root, CameraModel camera, std::vector<FrameRecord> records)
+      : format_(std::move(format)) {
+    root_ = std::move(root);
+    camera_ = std::move(camera);
+    records_ = std::move(records);
+  }
+  std::string format() const override { return format_; }
+
+ private:
+  std::string format_;
+};
+
+std::unique_ptr<DatasetReader> open_tum(const std::filesystem::path& root, const DatasetYaml* yaml);
+std::unique_ptr<DatasetReader> open_7scenes(const std::filesystem::path& root, const DatasetYaml* yaml);
+std::unique_ptr<DatasetReader> open_ycb(const std::filesystem::path& root, const DatasetYaml* yaml);
+std::unique_ptr<DatasetReader> open_synthetic(const std::filesystem::path& root, const DatasetYaml* yaml,
+                                              const DatasetOptions& options);
+
+/// rgb <-> depth records from two lists associated by timestamp (max 0.02 s, one-to-one);
+/// frame timestamp = rgb timestamp; unmatched rgb frames are dropped.
+std::vector<FrameRecord> associate_lists(const std::filesystem::path& rgb_list,
+                                         const std::filesystem::path& depth_list);
+/// Fills gt_T_world_camera of each record from a trajectory (pose_at).
+void attach_ground_truth(std::vector<FrameRecord>& records, const Trajectory& trajectory);
+
+}  // namespace semap::io_detail
