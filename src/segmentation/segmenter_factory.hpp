@@ -1,0 +1,27 @@
+#pragma once
+// The one way to build a segmenter from a spec string (CLI --segmenter / --model, config
+// segmentation.segmenter):
+//   "yolo:PATH"          YOLO-seg ONNX instance segmentation (YoloSegmenter)
+//   "semantic:PATH"      semantic segmentation ONNX model (SemanticSegmenter)
+//   "groundtruth"        the frame's own label/instance images (GroundTruthSegmenter)
+//   "precomputed:DIR"    NAME.label.png/.instances.png/.json from an external tool
+//   "PATH.onnx"          kind detected from the graph (2 outputs with a 4-D prototype tensor ->
+//                        yolo, 1 output -> semantic)
+//   "none" or ""         returns nullptr: the caller runs without segmentation.
+// Network and precomputed outputs are computed on the colour image; when `camera` has a
+// separate colour camera (METHODS B2) and config.register_to_depth is set, they are
+// resampled to depth pixels (frames must carry depth) before they are returned.
+#include <memory>
+#include <string>
+
+#include "core/camera.hpp"
+#include "segmentation/segmentation_config.hpp"
+#include "segmentation/segmenter.hpp"
+
+namespace semap {
+
+/// Throws semap::Error naming the model file (missing, not ONNX, wrong outputs) or the spec.
+std::unique_ptr<Segmenter> make_segmenter(const std::string& spec, const SegmentationConfig& config,
+                                          const CameraModel& camera);
+
+}  // namespace semap
