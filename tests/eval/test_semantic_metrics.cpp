@@ -102,7 +102,7 @@ TEST(SemanticMetrics, MissingHalfAndOffSurfaceVertices) {
   EXPECT_NEAR(e.completeness, 0.51, 0.006);  // half + the columns within 2 cm of the cut
   ASSERT_NE(find_class(e, kChair), nullptr);
   EXPECT_DOUBLE_EQ(find_class(e, kChair)->iou, 0.0);
-  EXPECT_NEAR(find_class(e, kTable)->recall, (0.5 + 0.05) / 0.7, 0.03)  // band edges depend on float rounding;
+  EXPECT_NEAR(find_class(e, kTable)->recall, (0.5 + 0.05) / 0.7, 0.03);  // band edges depend on float rounding
   EXPECT_DOUBLE_EQ(find_class(e, kTable)->precision, 1.0);
 
   // Floating vertices labelled floor 1 m above the plane: false positives of floor.
