@@ -7,16 +7,83 @@ namespace semap {
 
 /// Parameters of the dense semantic TSDF (METHODS.md B3-B7, A6).
 struct TsdfConfig {
-  double voxel_size = 0.02;       ///< s, metres
-  double max_range = 5.0;         ///< depth beyond this is skipped, metres
+  // Geometry (METHODS B4, B6).
+  double voxel_size = 0.02;        ///< s, metres
+  double truncation_voxels = 4.0;  ///< delta = truncation_voxels * s (B6: 4)
+  double epsilon_voxels = 1.0;     ///< epsilon = epsilon_voxels * s, start of the drop-off (B6: 1)
+  double min_range = 0.1;          ///< depth below this is skipped, metres
+  double max_range = 5.0;          ///< depth beyond this is skipped, metres
+  std::string integrator = "projective";  ///< "grouped" (B5+B6) | "projective" (nvblox/Open3D)
+  int threads = 0;                 ///< worker threads, 0 = all cores
+
+  // Weight quantisation (METHODS B3): u8 weight on a log scale,
+  // W(q) = weight_unit * (exp(q * ln(1 + weight_max / weight_unit) / 255) - 1).
+  double weight_unit = 0.01;   ///< w0: finest weight resolution (weights are 1/z^2, z in m)
+  double weight_max = 1000.0;  ///< W_max of B6 (W <- min(W + w, W_max))
+
+  // Labels (B6 compact rule, A6 Bayesian layer).
+  bool label_layer = true;       ///< compact vote: label byte + 1-byte vote confidence per voxel
+  bool bayes_layer = false;      ///< Bayesian top-k class probabilities per voxel (A6)
+  int bayes_top_k = 4;           ///< k classes kept per voxel (2 bytes each)
+  double bayes_default_confidence = 0.7;  ///< P(label) when only labels are given
+  double bayes_min_probability = 1e-3;    ///< floor of a class probability (keeps Bayes non-absorbing)
+  double label_band_voxels = 2.0;  ///< labels update only voxels with |d| <= this * s
+
+  // Colour.
+  bool colour_layer = false;  ///< RGB per voxel (3 bytes), weighted mean like the sdf
+
+  // Mesh (B7).
+  std::string mesh_colour = "class";  ///< "class" (core/labels.hpp palette) | "rgb"
+  double mesh_min_weight = 0.0;       ///< cube corners need a weight above this to be meshed
+
+  // Memory for long runs.
+  double drop_distance = 0.0;  ///< blocks farther than this from the camera are freed, m (0 = keep all)
+
+  double truncation() const { return truncation_voxels * voxel_size; }
+  double epsilon() const { return epsilon_voxels * voxel_size; }
 
   void visit(ParamVisitor& v) {
-    v.param("voxel_size", voxel_size, "m", "voxel edge length s (truncation delta = 4 s)");
+    v.param("voxel_size", voxel_size, "m", "voxel edge length s");
+    v.param("truncation_voxels", truncation_voxels, "voxels", "truncation delta = this * s (METHODS B6: 4)");
+    v.param("epsilon_voxels", epsilon_voxels, "voxels", "behind-surface weight drop-off starts at -this * s (B6: 1)");
+    v.param("min_range", min_range, "m", "depth below this is not integrated");
     v.param("max_range", max_range, "m", "depth beyond this is not integrated");
+    v.param("integrator", integrator, "", "grouped (semantic grouped ray casting, B5+B6) | projective");
+    v.param("threads", threads, "", "integration/meshing threads, 0 = all cores");
+    v.param("weight_unit", weight_unit, "", "finest step of the log-quantised u8 voxel weight");
+    v.param("weight_max", weight_max, "", "maximum accumulated voxel weight W_max (B6)");
+    v.param("label_layer", label_layer, "", "keep the compact label byte with its 1-byte vote confidence");
+    v.param("bayes_layer", bayes_layer, "", "keep per-voxel top-k class probabilities (METHODS A6)");
+    v.param("bayes_top_k", bayes_top_k, "classes", "classes kept per voxel by the Bayesian layer");
+    v.param("bayes_default_confidence", bayes_default_confidence, "", "P(observed label) when no confidence/probabilities are given");
+    v.param("bayes_min_probability", bayes_min_probability, "", "floor of any class probability in the Bayesian layer");
+    v.param("label_band_voxels", label_band_voxels, "voxels", "labels update voxels with |sdf| <= this * s");
+    v.param("colour_layer", colour_layer, "", "keep an RGB colour per voxel");
+    v.param("mesh_colour", mesh_colour, "", "vertex colour: class (palette) | rgb (colour layer)");
+    v.param("mesh_min_weight", mesh_min_weight, "", "cube corners need a weight above this to be meshed");
+    v.param("drop_distance", drop_distance, "m", "free blocks farther than this from the camera (0 = never)");
   }
   void validate() const {
     require_param(voxel_size > 0 && voxel_size < 1, "tsdf.voxel_size", "must be in (0, 1) m");
-    require_param(max_range > 0, "tsdf.max_range", "must be > 0");
+    require_param(truncation_voxels >= 1 && truncation_voxels <= 16, "tsdf.truncation_voxels", "must be in [1, 16]");
+    require_param(epsilon_voxels >= 0 && epsilon_voxels < truncation_voxels, "tsdf.epsilon_voxels",
+                  "must be in [0, truncation_voxels)");
+    require_param(min_range >= 0, "tsdf.min_range", "must be >= 0");
+    require_param(max_range > min_range, "tsdf.max_range", "must be > min_range");
+    require_param(integrator == "grouped" || integrator == "projective", "tsdf.integrator",
+                  "must be grouped or projective");
+    require_param(threads >= 0, "tsdf.threads", "must be >= 0");
+    require_param(weight_unit > 0, "tsdf.weight_unit", "must be > 0");
+    require_param(weight_max > weight_unit, "tsdf.weight_max", "must be > weight_unit");
+    require_param(bayes_top_k >= 1 && bayes_top_k <= 8, "tsdf.bayes_top_k", "must be in [1, 8]");
+    require_param(bayes_default_confidence > 0 && bayes_default_confidence < 1, "tsdf.bayes_default_confidence",
+                  "must be in (0, 1)");
+    require_param(bayes_min_probability > 0 && bayes_min_probability < 0.1, "tsdf.bayes_min_probability",
+                  "must be in (0, 0.1)");
+    require_param(label_band_voxels > 0, "tsdf.label_band_voxels", "must be > 0");
+    require_param(mesh_colour == "class" || mesh_colour == "rgb", "tsdf.mesh_colour", "must be class or rgb");
+    require_param(mesh_min_weight >= 0, "tsdf.mesh_min_weight", "must be >= 0");
+    require_param(drop_distance >= 0, "tsdf.drop_distance", "must be >= 0");
   }
 };
 

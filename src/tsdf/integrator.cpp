@@ -1,0 +1,579 @@
+#include "tsdf/integrator.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/info.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <cmath>
+
+#include "core/error.hpp"
+
+namespace semap {
+namespace {
+
+inline bool usable_depth(float z, float min_range, float max_range) { return z > min_range && z <= max_range; }
+
+/// Per-frame constants shared by both integrators.
+struct FrameSetup {
+  int width = 0, height = 0;
+  float fx, fy, cx, cy;
+  Eigen::Matrix3f R_wc;  // world <- camera
+  Eigen::Vector3f t_wc;  // camera centre in the world
+  Eigen::Matrix3f R_cw;
+  Eigen::Vector3f t_cw;
+  float s, delta, eps, label_band, min_range, max_range, default_confidence;
+  bool labels = false, confidence = false, probabilities = false, colour = false;
+  int prob_channels = 0;
+};
+
+FrameSetup setup_frame(const TsdfMap& map, const IntegrationInput& in) {
+  const TsdfConfig& cfg = map.config();
+  if (in.depth.empty() || in.depth.type() != CV_32FC1) throw Error("integrate", "depth must be a non-empty CV_32FC1 image");
+  auto check = [&](const cv::Mat& m, int type, const char* what) {
+    if (m.empty()) return false;
+    if (m.rows != in.depth.rows || m.cols != in.depth.cols)
+      throw Error("integrate", std::string(what) + " size differs from depth");
+    if (type >= 0 && m.type() != type) throw Error("integrate", std::string(what) + " has the wrong pixel type");
+    return true;
+  };
+  FrameSetup f;
+  f.width = in.depth.cols;
+  f.height = in.depth.rows;
+  f.fx = static_cast<float>(in.intrinsics.fx);
+  f.fy = static_cast<float>(in.intrinsics.fy);
+  f.cx = static_cast<float>(in.intrinsics.cx);
+  f.cy = static_cast<float>(in.intrinsics.cy);
+  if (!(f.fx > 0 && f.fy > 0)) throw Error("integrate", "intrinsics need fx, fy > 0");
+  f.R_wc = in.T_world_camera.linear().cast<float>();
+  f.t_wc = in.T_world_camera.translation().cast<float>();
+  if (!f.R_wc.allFinite() || !f.t_wc.allFinite()) throw Error("integrate", "pose is not finite");
+  f.R_cw = f.R_wc.transpose();
+  f.t_cw = -(f.R_cw * f.t_wc);
+  f.s = map.voxel_size();
+  f.delta = static_cast<float>(cfg.truncation());
+  f.eps = static_cast<float>(cfg.epsilon());
+  f.label_band = static_cast<float>(cfg.label_band_voxels * cfg.voxel_size);
+  f.min_range = static_cast<float>(cfg.min_range);
+  f.max_range = static_cast<float>(cfg.max_range);
+  f.default_confidence = static_cast<float>(cfg.bayes_default_confidence);
+  f.labels = check(in.labels, CV_8UC1, "labels");
+  f.confidence = check(in.confidence, CV_32FC1, "confidence");
+  f.colour = check(in.colour, CV_8UC3, "colour");
+  if (check(in.probabilities, -1, "probabilities")) {
+    if (in.probabilities.depth() != CV_32F) throw Error("integrate", "probabilities must be CV_32FC(n)");
+    f.probabilities = true;
+    f.prob_channels = in.probabilities.channels();
+  }
+  return f;
+}
+
+/// Context of the per-voxel update of METHODS B6 (+ label and colour layers).
+struct VoxelUpdater {
+  const WeightQuantizer& wq;
+  const BayesLayerCodec& bayes;
+  float delta, eps, label_band, w_max;
+  bool label_layer, bayes_layer, colour_layer;
+
+  /// d: signed distance (positive in front), w: ray weight before the drop-off.
+  /// Returns false when nothing was updated (beyond -delta).
+  bool update(Block& block, int li, float d, float w, ClassId label, const ClassDistribution* observation,
+              const Rgb8* colour) const {
+    if (d <= -delta) return false;
+    if (d < -eps) w *= (delta + d) / (delta - eps);  // B6 linear drop-off behind the surface
+    if (d > delta) d = delta;
+    TsdfVoxel& v = block.voxels[li];
+    const float W = wq.decode(v.weight_q);
+    const float W_new = W + w;
+    v.set_sdf(W > 0 ? (W * v.sdf() + w * d) / W_new : d);
+    v.weight_q = wq.encode(std::min(W_new, w_max));
+    if (colour_layer && colour) {
+      Rgb8& c = block.colour[li];
+      const float a = W / W_new, b = w / W_new;
+      c.r = static_cast<uint8_t>(std::lround(a * c.r + b * colour->r));
+      c.g = static_cast<uint8_t>(std::lround(a * c.g + b * colour->g));
+      c.b = static_cast<uint8_t>(std::lround(a * c.b + b * colour->b));
+    }
+    if (label != 0 && std::fabs(d) <= label_band) {
+      if (label_layer) compact_label_vote(v.label, block.label_confidence[li], label, w, wq);
+      if (bayes_layer && observation) bayes.update(&block.bayes[static_cast<size_t>(li) * bayes.bytes_per_voxel()], *observation);
+    }
+    return true;
+  }
+};
+
+VoxelUpdater make_updater(const TsdfMap& map, const FrameSetup& f) {
+  return VoxelUpdater{map.weights(),        map.bayes(),           f.delta,
+                      f.eps,                f.label_band,          static_cast<float>(map.config().weight_max),
+                      map.has_label_layer(), map.has_bayes_layer(), map.has_colour_layer()};
+}
+
+int arena_threads(const TsdfConfig& cfg) { return cfg.threads > 0 ? cfg.threads : tbb::info::default_concurrency(); }
+
+/// Amanatides-Woo traversal of the cells (edge `cell`) crossed by segment a -> b.
+template <class Visit>
+void traverse_cells(const Eigen::Vector3f& a, const Eigen::Vector3f& b, float cell, Visit&& visit) {
+  const Eigen::Vector3f pa = a / cell, pb = b / cell;
+  Eigen::Vector3i c = pa.array().floor().cast<int>();
+  const Eigen::Vector3i end = pb.array().floor().cast<int>();
+  const Eigen::Vector3f dir = pb - pa;
+  Eigen::Vector3i step;
+  Eigen::Vector3f t_max, t_delta;
+  for (int i = 0; i < 3; ++i) {
+    step[i] = dir[i] > 0 ? 1 : (dir[i] < 0 ? -1 : 0);
+    if (step[i] == 0) {
+      t_max[i] = t_delta[i] = std::numeric_limits<float>::infinity();
+    } else {
+      const float boundary = static_cast<float>(c[i] + (step[i] > 0 ? 1 : 0));
+      t_max[i] = (boundary - pa[i]) / dir[i];
+      t_delta[i] = static_cast<float>(step[i]) / dir[i];
+    }
+  }
+  const int n = 1 + std::abs(end.x() - c.x()) + std::abs(end.y() - c.y()) + std::abs(end.z() - c.z());
+  for (int i = 0; i < n; ++i) {
+    visit(c);
+    int axis = t_max.x() < t_max.y() ? (t_max.x() < t_max.z() ? 0 : 2) : (t_max.y() < t_max.z() ? 1 : 2);
+    c[axis] += step[axis];
+    t_max[axis] += t_delta[axis];
+  }
+}
+
+// Group keys: 21 bits per axis (voxel indices within +-2^20).
+constexpr int kKeyBits = 21;
+constexpr int32_t kKeyOffset = 1 << (kKeyBits - 1);
+inline bool key_in_range(const Eigen::Vector3i& v) {
+  return (v.array() >= -kKeyOffset).all() && (v.array() < kKeyOffset).all();
+}
+inline uint64_t pack_key(const Eigen::Vector3i& v) {
+  return static_cast<uint64_t>(v.x() + kKeyOffset) | (static_cast<uint64_t>(v.y() + kKeyOffset) << kKeyBits) |
+         (static_cast<uint64_t>(v.z() + kKeyOffset) << (2 * kKeyBits));
+}
+inline size_t mix_key(uint64_t k) {
+  k ^= k >> 33;
+  k *= 0xff51afd7ed558ccdULL;
+  k ^= k >> 33;
+  return static_cast<size_t>(k);
+}
+
+/// Touched-block bookkeeping of one frame: blocks get a dense index via their frame stamp.
+struct TouchedBlocks {
+  std::vector<Block*> blocks;
+  uint32_t stamp = 0;
+  size_t allocated = 0;
+  int32_t touch(TsdfMap& map, const BlockIndex& b) {
+    Block* block = map.find_block(b);
+    if (!block) {
+      block = &map.allocate_block(b);
+      ++allocated;
+    }
+    if (block->frame_stamp != stamp) {
+      block->frame_stamp = stamp;
+      block->frame_slot = static_cast<int32_t>(blocks.size());
+      blocks.push_back(block);
+    }
+    return block->frame_slot;
+  }
+};
+
+// =============================================================================================
+// Grouped ray casting (METHODS B5 + B6)
+// =============================================================================================
+class GroupedIntegrator final : public Integrator {
+ public:
+  explicit GroupedIntegrator(const TsdfConfig& cfg) : arena_(arena_threads(cfg)) {}
+  std::string name() const override { return "grouped"; }
+
+  void integrate(TsdfMap& map, const IntegrationInput& in) override {
+    const FrameSetup f = setup_frame(map, in);
+    stats_ = {};
+    arena_.execute([&] { run(map, in, f); });
+    if (map.config().drop_distance > 0) map.remove_blocks_beyond(f.t_wc, static_cast<float>(map.config().drop_distance));
+  }
+
+ private:
+  struct PixelPoint {
+    Eigen::Vector3f p;
+    float w;        // 1/z^2, 0 = invalid pixel
+    uint64_t key;
+    int32_t group;
+  };
+  struct LabelSlot {
+    Eigen::Vector3f weighted_sum = Eigen::Vector3f::Zero();
+    float weight = 0, confidence_sum = 0;
+    float rgb_sum[3] = {0, 0, 0};
+    ClassId label = 0;
+    int32_t next = -1;
+  };
+  struct Group {
+    uint64_t key;
+    int32_t first_slot;
+    float total_weight;
+    // Filled after grouping:
+    Eigen::Vector3f point;
+    ClassId label;
+    Rgb8 colour;
+    ClassDistribution observation;
+  };
+  struct RayUpdate {
+    VoxelIndex voxel;
+    float d;
+    int32_t group;
+  };
+
+  void run(TsdfMap& map, const IntegrationInput& in, const FrameSetup& f) {
+    const int W = f.width, H = f.height;
+    const size_t n_pixels = static_cast<size_t>(W) * H;
+    points_.resize(n_pixels);
+    const float inv_s = 1.0f / f.s;
+    // 1. Back-project every pixel (parallel, per row).
+    tbb::parallel_for(tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& rows) {
+      for (int v = rows.begin(); v < rows.end(); ++v) {
+        const float* depth = in.depth.ptr<float>(v);
+        for (int u = 0; u < W; ++u) {
+          PixelPoint& pp = points_[static_cast<size_t>(v) * W + u];
+          const float z = depth[u];
+          pp.w = 0;
+          pp.group = -1;
+          if (!usable_depth(z, f.min_range, f.max_range)) continue;
+          const Eigen::Vector3f pc((u - f.cx) * z / f.fx, (v - f.cy) * z / f.fy, z);
+          pp.p = f.R_wc * pc + f.t_wc;
+          const Eigen::Vector3i vox = (pp.p * inv_s).array().floor().cast<int>();
+          if (!key_in_range(vox)) continue;
+          pp.key = pack_key(vox);
+          pp.w = 1.0f / (z * z);  // B6 point weight
+        }
+      }
+    });
+    // 2. Group by voxel (serial, pixel order: deterministic). METHODS B5.
+    size_t capacity = 1024;
+    while (capacity < 2 * n_pixels) capacity *= 2;
+    table_.assign(capacity, -1);
+    const size_t mask = capacity - 1;
+    groups_.clear();
+    slots_.clear();
+    for (size_t i = 0; i < n_pixels; ++i) {
+      PixelPoint& pp = points_[i];
+      if (pp.w == 0) continue;
+      ++stats_.valid_pixels;
+      size_t h = mix_key(pp.key) & mask;
+      int32_t g;
+      while (true) {
+        g = table_[h];
+        if (g < 0) {
+          g = static_cast<int32_t>(groups_.size());
+          table_[h] = g;
+          groups_.push_back(Group{pp.key, -1, 0.0f, {}, 0, {}, {}});
+          break;
+        }
+        if (groups_[g].key == pp.key) break;
+        h = (h + 1) & mask;
+      }
+      pp.group = g;
+      Group& group = groups_[g];
+      group.total_weight += pp.w;
+      const ClassId label = f.labels ? in.labels.ptr<uint8_t>(0)[i] : 0;
+      int32_t s = group.first_slot, last = -1;
+      while (s >= 0 && slots_[s].label != label) {
+        last = s;
+        s = slots_[s].next;
+      }
+      if (s < 0) {
+        s = static_cast<int32_t>(slots_.size());
+        slots_.emplace_back();
+        slots_.back().label = label;
+        if (last < 0) group.first_slot = s;
+        else slots_[last].next = s;
+      }
+      LabelSlot& slot = slots_[s];
+      slot.weight += pp.w;
+      slot.weighted_sum += pp.w * pp.p;
+      if (f.confidence) slot.confidence_sum += pp.w * in.confidence.ptr<float>(0)[i];
+      if (f.colour) {
+        const uint8_t* bgr = in.colour.ptr<uint8_t>(0) + 3 * i;
+        slot.rgb_sum[0] += pp.w * bgr[2];
+        slot.rgb_sum[1] += pp.w * bgr[1];
+        slot.rgb_sum[2] += pp.w * bgr[0];
+      }
+    }
+    stats_.rays = groups_.size();
+    // 3. Each group's label = argmax W_l, its point = weighted mean of the points with that label.
+    const bool want_observation = map.has_bayes_layer() && f.labels;
+    for (Group& g : groups_) {
+      const LabelSlot* best = nullptr;
+      for (int32_t s = g.first_slot; s >= 0; s = slots_[s].next) {
+        const LabelSlot& slot = slots_[s];
+        if (!best || slot.weight > best->weight || (slot.weight == best->weight && slot.label < best->label)) best = &slot;
+      }
+      g.label = best->label;
+      g.point = best->weighted_sum / best->weight;
+      g.colour = Rgb8{static_cast<uint8_t>(std::lround(best->rgb_sum[0] / best->weight)),
+                      static_cast<uint8_t>(std::lround(best->rgb_sum[1] / best->weight)),
+                      static_cast<uint8_t>(std::lround(best->rgb_sum[2] / best->weight))};
+      if (want_observation && g.label != 0 && !f.probabilities) {
+        const float c = f.confidence ? std::clamp(best->confidence_sum / best->weight, 0.01f, 0.999f) : f.default_confidence;
+        g.observation = ClassDistribution::from_label(g.label, c);
+      }
+    }
+    if (want_observation && f.probabilities) group_probabilities(in, f, map.bayes().k());
+    // 4. Cast one ray per group through the truncation band (parallel in fixed chunks).
+    constexpr size_t kChunk = 512;
+    const size_t n_chunks = (groups_.size() + kChunk - 1) / kChunk;
+    chunk_updates_.resize(n_chunks);
+    const float delta = f.delta;
+    tbb::parallel_for(size_t{0}, n_chunks, [&](size_t c) {
+      std::vector<RayUpdate>& out = chunk_updates_[c];
+      out.clear();
+      const size_t end = std::min(groups_.size(), (c + 1) * kChunk);
+      for (size_t g = c * kChunk; g < end; ++g) {
+        const Eigen::Vector3f ray = groups_[g].point - f.t_wc;
+        const float dist = ray.norm();
+        if (!(dist > 0)) continue;
+        const Eigen::Vector3f dir = ray / dist;
+        const Eigen::Vector3f a = f.t_wc + dir * std::max(0.0f, dist - delta);
+        const Eigen::Vector3f b = f.t_wc + dir * (dist + delta);
+        traverse_cells(a, b, f.s, [&](const Eigen::Vector3i& vox) {
+          const Eigen::Vector3f centre = (vox.cast<float>().array() + 0.5f) * f.s;
+          const float d = dist - (centre - f.t_wc).norm();  // B6 d(v, p, o)
+          if (d <= -delta) return;
+          out.push_back(RayUpdate{vox, d, static_cast<int32_t>(g)});
+        });
+      }
+    });
+    // 5. Bucket the updates by block (serial, stable: fixed order per block).
+    TouchedBlocks touched;
+    touched.stamp = map.next_frame_stamp();
+    size_t n_updates = 0;
+    for (const auto& v : chunk_updates_) n_updates += v.size();
+    update_block_.resize(n_updates);
+    size_t i = 0;
+    BlockIndex last_block(INT32_MIN, INT32_MIN, INT32_MIN);
+    int32_t last_slot = -1;
+    for (const auto& chunk : chunk_updates_)
+      for (const RayUpdate& u : chunk) {
+        const BlockIndex b = block_of_voxel(u.voxel);
+        if (b != last_block) {
+          last_slot = touched.touch(map, b);
+          last_block = b;
+        }
+        update_block_[i++] = last_slot;
+      }
+    const size_t n_blocks = touched.blocks.size();
+    offsets_.assign(n_blocks + 1, 0);
+    for (size_t k = 0; k < n_updates; ++k) ++offsets_[update_block_[k] + 1];
+    for (size_t k = 0; k < n_blocks; ++k) offsets_[k + 1] += offsets_[k];
+    order_.resize(n_updates);
+    {
+      std::vector<size_t> cursor(offsets_.begin(), offsets_.end() - 1);
+      size_t k = 0;
+      for (const auto& chunk : chunk_updates_)
+        for (const RayUpdate& u : chunk) order_[cursor[update_block_[k++]]++] = &u;
+    }
+    // 6. Apply per block in parallel (each block's updates in ray order: deterministic).
+    const VoxelUpdater updater = make_updater(map, f);
+    const bool colour = f.colour && map.has_colour_layer();
+    tbb::parallel_for(size_t{0}, n_blocks, [&](size_t k) {
+      Block& block = *touched.blocks[k];
+      for (size_t j = offsets_[k]; j < offsets_[k + 1]; ++j) {
+        const RayUpdate& u = *order_[j];
+        const Group& g = groups_[u.group];
+        updater.update(block, local_index(u.voxel), u.d, g.total_weight, g.label,
+                       want_observation ? &g.observation : nullptr, colour ? &g.colour : nullptr);
+      }
+      block.mesh_dirty = true;
+    });
+    stats_.voxel_updates = n_updates;
+    stats_.touched_blocks = n_blocks;
+    stats_.allocated_blocks = touched.allocated;
+  }
+
+  /// Bayesian observation of a group from per-pixel probabilities: the weighted mean
+  /// probability vector of the group's winning-label points, reduced to its top k.
+  void group_probabilities(const IntegrationInput& in, const FrameSetup& f, int k) {
+    const int nc = f.prob_channels;
+    std::vector<float> sums(groups_.size() * nc, 0.0f);
+    const size_t n = points_.size();
+    for (size_t i = 0; i < n; ++i) {
+      const PixelPoint& pp = points_[i];
+      if (pp.group < 0) continue;
+      const ClassId label = in.labels.ptr<uint8_t>(0)[i];
+      if (label != groups_[pp.group].label) continue;
+      const float* probs = in.probabilities.ptr<float>(0) + i * nc;
+      float* sum = &sums[static_cast<size_t>(pp.group) * nc];
+      for (int c = 0; c < nc; ++c) sum[c] += pp.w * probs[c];
+    }
+    for (size_t g = 0; g < groups_.size(); ++g)
+      if (groups_[g].label != 0) groups_[g].observation = ClassDistribution::from_probabilities(&sums[g * nc], nc, k);
+  }
+
+  tbb::task_arena arena_;
+  std::vector<PixelPoint> points_;
+  std::vector<int32_t> table_;
+  std::vector<Group> groups_;
+  std::vector<LabelSlot> slots_;
+  std::vector<std::vector<RayUpdate>> chunk_updates_;
+  std::vector<int32_t> update_block_;
+  std::vector<size_t> offsets_;
+  std::vector<const RayUpdate*> order_;
+};
+
+// =============================================================================================
+// Projective integration (nvblox / Open3D style)
+// =============================================================================================
+class ProjectiveIntegrator final : public Integrator {
+ public:
+  explicit ProjectiveIntegrator(const TsdfConfig& cfg) : arena_(arena_threads(cfg)) {}
+  std::string name() const override { return "projective"; }
+
+  void integrate(TsdfMap& map, const IntegrationInput& in) override {
+    const FrameSetup f = setup_frame(map, in);
+    stats_ = {};
+    arena_.execute([&] { run(map, in, f); });
+    if (map.config().drop_distance > 0) map.remove_blocks_beyond(f.t_wc, static_cast<float>(map.config().drop_distance));
+  }
+
+ private:
+  void run(TsdfMap& map, const IntegrationInput& in, const FrameSetup& f) {
+    const int W = f.width, H = f.height;
+    const float block_size = map.block_size();
+    // 1. Blocks crossed by each pixel's truncation band (parallel over fixed row chunks).
+    constexpr int kRowsPerChunk = 8;
+    const int n_chunks = (H + kRowsPerChunk - 1) / kRowsPerChunk;
+    chunk_blocks_.resize(n_chunks);
+    std::vector<size_t> valid(n_chunks, 0);
+    tbb::parallel_for(0, n_chunks, [&](int c) {
+      std::vector<uint64_t>& out = chunk_blocks_[c];
+      out.clear();
+      // Small direct-mapped cache to skip repeated keys of neighbouring pixels.
+      std::array<uint64_t, 64> recent;
+      recent.fill(~0ULL);
+      for (int v = c * kRowsPerChunk; v < std::min(H, (c + 1) * kRowsPerChunk); ++v) {
+        const float* depth = in.depth.ptr<float>(v);
+        for (int u = 0; u < W; ++u) {
+          const float z = depth[u];
+          if (!usable_depth(z, f.min_range, f.max_range)) continue;
+          ++valid[c];
+          const Eigen::Vector3f pc((u - f.cx) * z / f.fx, (v - f.cy) * z / f.fy, z);
+          const float dist = pc.norm();
+          const Eigen::Vector3f dir = f.R_wc * (pc / dist);
+          const Eigen::Vector3f a = f.t_wc + dir * std::max(0.0f, dist - f.delta);
+          const Eigen::Vector3f b = f.t_wc + dir * (dist + f.delta);
+          traverse_cells(a, b, block_size, [&](const Eigen::Vector3i& blk) {
+            if (!key_in_range(blk)) return;
+            const uint64_t key = pack_key(blk);
+            uint64_t& r = recent[mix_key(key) & 63];
+            if (r == key) return;
+            r = key;
+            out.push_back(key);
+          });
+        }
+      }
+    });
+    TouchedBlocks touched;
+    touched.stamp = map.next_frame_stamp();
+    for (int c = 0; c < n_chunks; ++c) {
+      stats_.valid_pixels += valid[c];
+      for (uint64_t key : chunk_blocks_[c]) {
+        const BlockIndex b(static_cast<int>(key & ((1u << kKeyBits) - 1)) - kKeyOffset,
+                           static_cast<int>((key >> kKeyBits) & ((1u << kKeyBits) - 1)) - kKeyOffset,
+                           static_cast<int>(key >> (2 * kKeyBits)) - kKeyOffset);
+        touched.touch(map, b);
+      }
+    }
+    // Per-pixel Bayesian observations (only with probability images).
+    const bool bayes = map.has_bayes_layer() && f.labels;
+    if (bayes && f.probabilities) {
+      pixel_observations_.resize(static_cast<size_t>(W) * H);
+      const int k = map.bayes().k();
+      tbb::parallel_for(0, H, [&](int v) {
+        const float* probs = in.probabilities.ptr<float>(v);
+        for (int u = 0; u < W; ++u)
+          pixel_observations_[static_cast<size_t>(v) * W + u] =
+              ClassDistribution::from_probabilities(probs + static_cast<size_t>(u) * f.prob_channels, f.prob_channels, k);
+      });
+    }
+    // 2. Project every voxel of every touched block (parallel per block).
+    const VoxelUpdater updater = make_updater(map, f);
+    const bool colour = f.colour && map.has_colour_layer();
+    std::vector<size_t> updates(touched.blocks.size(), 0);
+    tbb::parallel_for(size_t{0}, touched.blocks.size(), [&](size_t k) {
+      Block& block = *touched.blocks[k];
+      const Eigen::Vector3f origin = block.index.cast<float>() * block_size + Eigen::Vector3f::Constant(0.5f * f.s);
+      const Eigen::Vector3f base = f.R_cw * origin + f.t_cw;
+      const Eigen::Vector3f step_x = f.R_cw.col(0) * f.s, step_y = f.R_cw.col(1) * f.s, step_z = f.R_cw.col(2) * f.s;
+      size_t n = 0;
+      for (int z = 0; z < kBlockSide; ++z)
+        for (int y = 0; y < kBlockSide; ++y) {
+          Eigen::Vector3f pc = base + step_y * static_cast<float>(y) + step_z * static_cast<float>(z);
+          for (int x = 0; x < kBlockSide; ++x, pc += step_x) {
+            if (pc.z() <= f.min_range) continue;
+            const float inv_z = 1.0f / pc.z();
+            const int u = static_cast<int>(std::floor(f.fx * pc.x() * inv_z + f.cx + 0.5f));
+            const int v = static_cast<int>(std::floor(f.fy * pc.y() * inv_z + f.cy + 0.5f));
+            if (u < 0 || v < 0 || u >= W || v >= H) continue;
+            const float depth = in.depth.ptr<float>(v)[u];
+            if (!usable_depth(depth, f.min_range, f.max_range)) continue;
+            const float sdf = (depth - pc.z()) * pc.norm() * inv_z;  // along the ray
+            if (sdf <= -f.delta) continue;
+            const size_t pix = static_cast<size_t>(v) * W + u;
+            const ClassId label = f.labels ? in.labels.ptr<uint8_t>(v)[u] : 0;
+            ClassDistribution observation;
+            const ClassDistribution* obs = nullptr;
+            if (bayes && label != 0) {
+              if (f.probabilities) {
+                obs = &pixel_observations_[pix];
+              } else {
+                const float c = f.confidence ? std::clamp(in.confidence.ptr<float>(v)[u], 0.01f, 0.999f) : f.default_confidence;
+                observation = ClassDistribution::from_label(label, c);
+                obs = &observation;
+              }
+            }
+            Rgb8 rgb;
+            if (colour) {
+              const uint8_t* bgr = in.colour.ptr<uint8_t>(v) + 3 * u;
+              rgb = Rgb8{bgr[2], bgr[1], bgr[0]};
+            }
+            n += updater.update(block, x + kBlockSide * (y + kBlockSide * z), sdf, 1.0f / (depth * depth), label, obs,
+                                colour ? &rgb : nullptr);
+          }
+        }
+      if (n) block.mesh_dirty = true;
+      updates[k] = n;
+    });
+    for (size_t n : updates) stats_.voxel_updates += n;
+    stats_.touched_blocks = touched.blocks.size();
+    stats_.allocated_blocks = touched.allocated;
+  }
+
+  tbb::task_arena arena_;
+  std::vector<std::vector<uint64_t>> chunk_blocks_;
+  std::vector<ClassDistribution> pixel_observations_;
+};
+
+}  // namespace
+
+std::unique_ptr<Integrator> make_integrator(const std::string& name, const TsdfConfig& config) {
+  if (name == "grouped") return std::make_unique<GroupedIntegrator>(config);
+  if (name == "projective") return std::make_unique<ProjectiveIntegrator>(config);
+  throw Error("tsdf.integrator", "unknown integrator '" + name + "' (grouped | projective)");
+}
+
+std::vector<std::string> integrator_names() { return {"grouped", "projective"}; }
+
+PointGroup group_points(const std::vector<LabelledPoint>& points) {
+  PointGroup g;
+  std::array<float, kNumClasses> weight{};
+  for (const LabelledPoint& p : points) {
+    weight[p.label] += p.weight;
+    g.total_weight += p.weight;
+  }
+  for (int l = 0; l < kNumClasses; ++l)
+    if (weight[l] > weight[g.label]) g.label = static_cast<ClassId>(l);
+  g.label_weight = weight[g.label];
+  Eigen::Vector3f sum = Eigen::Vector3f::Zero();
+  for (const LabelledPoint& p : points)
+    if (p.label == g.label) sum += p.weight * p.position;
+  g.point = g.label_weight > 0 ? Eigen::Vector3f(sum / g.label_weight) : Eigen::Vector3f::Zero();
+  return g;
+}
+
+}  // namespace semap

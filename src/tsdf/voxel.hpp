@@ -1,0 +1,164 @@
+#pragma once
+// Voxel types of the TSDF (METHODS.md B3) and the quantisers of its optional layers (A6).
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+
+#include "core/labels.hpp"
+
+namespace semap {
+
+// ---- IEEE 754 binary16 (hand-rolled: no F16C instructions needed, round to nearest even) ----
+
+inline uint16_t float_to_half(float value) {
+  uint32_t x;
+  std::memcpy(&x, &value, 4);
+  const uint32_t sign = (x >> 16) & 0x8000u;
+  uint32_t mantissa = x & 0x7fffffu;
+  const int32_t exponent = static_cast<int32_t>((x >> 23) & 0xffu);
+  if (exponent == 0xff) return static_cast<uint16_t>(sign | 0x7c00u | (mantissa ? 0x200u : 0u));
+  const int32_t e = exponent - 127 + 15;
+  if (e >= 0x1f) return static_cast<uint16_t>(sign | 0x7c00u);  // overflow -> inf
+  if (e <= 0) {                                                  // subnormal half or zero
+    if (e < -10) return static_cast<uint16_t>(sign);
+    mantissa |= 0x800000u;
+    const int shift = 14 - e;
+    uint32_t h = mantissa >> shift;
+    const uint32_t rest = mantissa & ((1u << shift) - 1u), halfway = 1u << (shift - 1);
+    if (rest > halfway || (rest == halfway && (h & 1u))) ++h;
+    return static_cast<uint16_t>(sign | h);
+  }
+  uint32_t h = sign | (static_cast<uint32_t>(e) << 10) | (mantissa >> 13);
+  const uint32_t rest = mantissa & 0x1fffu;
+  if (rest > 0x1000u || (rest == 0x1000u && (h & 1u))) ++h;  // a carry into the exponent is correct
+  return static_cast<uint16_t>(h);
+}
+
+inline float half_to_float(uint16_t h) {
+  const uint32_t sign = static_cast<uint32_t>(h & 0x8000u) << 16;
+  const uint32_t exponent = (h >> 10) & 0x1fu, mantissa = h & 0x3ffu;
+  uint32_t x;
+  if (exponent == 0) {
+    const float f = static_cast<float>(mantissa) * (1.0f / 16777216.0f);  // m * 2^-24
+    return sign ? -f : f;
+  }
+  if (exponent == 31) x = sign | 0x7f800000u | (mantissa << 13);
+  else x = sign | ((exponent + 112u) << 23) | (mantissa << 13);
+  float f;
+  std::memcpy(&f, &x, 4);
+  return f;
+}
+
+// ---- core voxel (METHODS B3) ----
+
+/// 4 bytes: fp16 signed distance (metres), u8 log-quantised weight (WeightQuantizer), u8 label.
+struct TsdfVoxel {
+  uint16_t sdf_half = 0;
+  uint8_t weight_q = 0;  ///< 0 = never observed
+  ClassId label = 0;     ///< compact label (B6 rule: weighted majority vote, see VoteQuantizer)
+
+  float sdf() const { return half_to_float(sdf_half); }
+  void set_sdf(float d) { sdf_half = float_to_half(d); }
+  bool operator==(const TsdfVoxel&) const = default;
+};
+static_assert(sizeof(TsdfVoxel) == 4, "METHODS B3: one voxel = 4 bytes");
+
+/// u8 weight on a log scale: W(q) = unit * (exp(q * L / 255) - 1), L = ln(1 + max / unit).
+/// Relative step ~ L / 255 (4.5 % with the defaults), so weights from 1/z^2 at 5 m (0.04) to
+/// grouped sums of hundreds keep their ratios. An increment smaller than half a step rounds away:
+/// the weight then stops growing and the sdf keeps a running average (a soft W_max).
+class WeightQuantizer {
+ public:
+  WeightQuantizer(double unit = 0.01, double max = 1000.0) : unit_(unit), max_(max) {
+    scale_ = std::log1p(max / unit) / 255.0;
+    for (int q = 0; q < 256; ++q) table_[q] = static_cast<float>(unit * std::expm1(q * scale_));
+    table_[255] = static_cast<float>(max);
+  }
+  float decode(uint8_t q) const { return table_[q]; }
+  uint8_t encode(float weight) const {
+    if (!(weight > 0)) return 0;
+    if (weight >= max_) return 255;
+    const double q = std::log1p(weight / unit_) / scale_;
+    return static_cast<uint8_t>(std::clamp(std::lround(q), 1L, 255L));  // observed stays > 0
+  }
+  double unit() const { return unit_; }
+  double max() const { return max_; }
+
+ private:
+  double unit_, max_, scale_;
+  std::array<float, 256> table_{};
+};
+
+// ---- Bayesian label layer (METHODS A6) ----
+
+/// Up to kMaxTopK (class, probability) pairs describing one observation or one voxel's
+/// distribution; the mass not listed, `rest_each`, is spread evenly over the other classes.
+constexpr int kMaxTopK = 8;
+constexpr int kNumRealClasses = kNumClasses - 1;  ///< ids 1..kNumClasses-1 (0 = unlabelled)
+
+struct ClassDistribution {
+  int count = 0;
+  std::array<ClassId, kMaxTopK> classes{};
+  std::array<float, kMaxTopK> probabilities{};
+  float rest_each = 1.0f / kNumRealClasses;  ///< probability of every class not listed
+
+  /// A label with confidence c: P(label) = c, the remaining 1 - c spread evenly over the others.
+  static ClassDistribution from_label(ClassId label, float confidence);
+  /// The k most probable classes of a full per-class vector (index = class id, index 0 ignored).
+  static ClassDistribution from_probabilities(const float* probs, int num_channels, int k);
+};
+
+/// Per voxel: k (class, q) byte pairs, q = round(-ln(p) / step) with p = min_probability at
+/// q = 255; class 0 marks an empty slot. Sorted by probability, most probable first.
+class BayesLayerCodec {
+ public:
+  BayesLayerCodec(int k = 4, double min_probability = 1e-3) : k_(k), min_p_(min_probability) {
+    step_ = -std::log(min_probability) / 255.0;
+    for (int q = 0; q < 256; ++q) table_[q] = static_cast<float>(std::exp(-q * step_));
+  }
+  int k() const { return k_; }
+  int bytes_per_voxel() const { return 2 * k_; }
+  float decode(uint8_t q) const { return table_[q]; }
+  uint8_t encode(float p) const {
+    if (!(p > min_p_)) return 255;
+    return static_cast<uint8_t>(std::clamp(std::lround(-std::log(p) / step_), 0L, 255L));
+  }
+  /// Reads a voxel's stored distribution (empty voxel = uniform prior).
+  ClassDistribution read(const uint8_t* voxel) const;
+  /// Recursive Bayes (A6): posterior ∝ observation × prior over ALL classes (the unlisted mass
+  /// of both is exact through rest_each), normalised, the top k kept and quantised.
+  void update(uint8_t* voxel, const ClassDistribution& observation) const;
+  /// Most probable class of a voxel (0 when never labelled).
+  static ClassId argmax(const uint8_t* voxel) { return voxel[0]; }
+
+ private:
+  int k_;
+  double min_p_, step_;
+  std::array<float, 256> table_{};
+};
+
+/// Compact label rule (METHODS B6 leaves it open): a weighted Boyer-Moore majority vote. The
+/// voxel keeps its label byte plus a 1-byte vote confidence C (log-quantised like the weight).
+/// Same label: C += w. Different label: C -= w, and when C would go negative the new label
+/// replaces the stored one with confidence |C - w|. A label holding more than half of the
+/// accumulated weight therefore always ends up stored.
+inline void compact_label_vote(ClassId& label, uint8_t& confidence_q, ClassId observed, float w,
+                               const WeightQuantizer& quantizer) {
+  if (observed == 0) return;
+  const float c = quantizer.decode(confidence_q);
+  if (label == 0 || confidence_q == 0) {
+    label = observed;
+    confidence_q = quantizer.encode(w);
+  } else if (label == observed) {
+    confidence_q = quantizer.encode(c + w);
+  } else if (w > c) {
+    label = observed;
+    confidence_q = quantizer.encode(w - c);
+  } else {
+    confidence_q = quantizer.encode(c - w);
+  }
+}
+
+}  // namespace semap

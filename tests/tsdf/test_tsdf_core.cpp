@@ -1,0 +1,195 @@
+// Unit tests of the TSDF building blocks: voxel layout, half floats, weight quantisation,
+// B5 grouping, the compact label vote and the A6 Bayesian update, the block hash table.
+#include <gtest/gtest.h>
+
+#include <random>
+#include <unordered_map>
+
+#include "tsdf/integrator.hpp"
+#include "tsdf/tsdf_map.hpp"
+#include "tsdf/voxel.hpp"
+
+namespace semap {
+namespace {
+
+TEST(TsdfVoxel, IsFourBytes) {
+  static_assert(sizeof(TsdfVoxel) == 4);
+  EXPECT_EQ(sizeof(TsdfVoxel), 4u);
+}
+
+TEST(HalfFloat, RoundTripsEveryHalf) {
+  for (uint32_t h = 0; h < 65536; ++h) {
+    const uint16_t bits = static_cast<uint16_t>(h);
+    const float f = half_to_float(bits);
+    if (std::isnan(f)) {
+      EXPECT_TRUE(std::isnan(half_to_float(float_to_half(f))));
+      continue;
+    }
+    EXPECT_EQ(float_to_half(f), bits) << h;
+  }
+}
+
+TEST(HalfFloat, AccurateToHalfAnUlp) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> dist(-0.5f, 0.5f);
+  for (int i = 0; i < 200000; ++i) {
+    const float f = dist(rng);
+    const float back = half_to_float(float_to_half(f));
+    // binary16 has 11 significant bits: relative error <= 2^-11 for normal numbers.
+    EXPECT_LE(std::fabs(back - f), std::max(std::fabs(f) * 0x1p-11f, 0x1p-25f)) << f;
+#if defined(__FLT16_MAX__)
+    EXPECT_EQ(back, static_cast<float>(static_cast<_Float16>(f))) << f;
+#endif
+  }
+  EXPECT_TRUE(std::isinf(half_to_float(float_to_half(1e6f))));
+}
+
+TEST(WeightQuantizer, MonotoneLogScale) {
+  const WeightQuantizer q(0.01, 1000.0);
+  EXPECT_EQ(q.encode(0.0f), 0);
+  EXPECT_EQ(q.decode(0), 0.0f);
+  EXPECT_FLOAT_EQ(q.decode(255), 1000.0f);
+  for (int i = 1; i < 256; ++i) EXPECT_GT(q.decode(i), q.decode(i - 1));
+  for (float w : {0.02f, 0.1f, 1.0f, 7.0f, 55.0f, 300.0f}) {
+    EXPECT_NEAR(q.decode(q.encode(w)), w, 0.03f * w) << w;  // < half a 4.5 % step
+  }
+  EXPECT_EQ(q.encode(1e9f), 255);
+  EXPECT_GE(q.encode(1e-9f), 1);  // observed stays observed
+}
+
+TEST(SemanticGrouping, PicksWeightedMajorityLabelAndItsMean) {
+  // 3 chair points of weight 1 against 2 table points of weight 2: table wins (4 > 3).
+  std::vector<LabelledPoint> pts = {
+      {{0.0f, 0.0f, 1.0f}, 1.0f, id(Label::kChair)}, {{0.01f, 0.0f, 1.0f}, 1.0f, id(Label::kChair)},
+      {{0.02f, 0.0f, 1.0f}, 1.0f, id(Label::kChair)}, {{0.0f, 0.01f, 1.0f}, 2.0f, id(Label::kTable)},
+      {{0.0f, 0.02f, 1.0f}, 2.0f, id(Label::kTable)}};
+  PointGroup g = group_points(pts);
+  EXPECT_EQ(g.label, id(Label::kTable));
+  EXPECT_FLOAT_EQ(g.label_weight, 4.0f);
+  EXPECT_FLOAT_EQ(g.total_weight, 7.0f);
+  EXPECT_NEAR(g.point.y(), 0.015f, 1e-6f);  // mean of the table points only
+  EXPECT_NEAR(g.point.x(), 0.0f, 1e-6f);
+  // More points but less weight loses.
+  pts.push_back({{0.0f, 0.0f, 1.0f}, 0.5f, id(Label::kChair)});
+  EXPECT_EQ(group_points(pts).label, id(Label::kTable));  // chair 3.5 < table 4
+  pts.push_back({{0.0f, 0.0f, 1.0f}, 1.0f, id(Label::kChair)});
+  EXPECT_EQ(group_points(pts).label, id(Label::kChair));  // chair 4.5 > table 4
+}
+
+TEST(CompactLabel, WeightedMajorityVoteOvertakes) {
+  const WeightQuantizer q;
+  ClassId label = 0;
+  uint8_t conf = 0;
+  compact_label_vote(label, conf, id(Label::kChair), 1.0f, q);
+  EXPECT_EQ(label, id(Label::kChair));
+  compact_label_vote(label, conf, id(Label::kTable), 0.5f, q);
+  EXPECT_EQ(label, id(Label::kChair));  // 1 - 0.5 left
+  compact_label_vote(label, conf, id(Label::kTable), 0.8f, q);
+  EXPECT_EQ(label, id(Label::kTable));  // overtaken: 0.3 left for table
+  compact_label_vote(label, conf, 0, 10.0f, q);
+  EXPECT_EQ(label, id(Label::kTable));  // unlabelled pixels never vote
+  // 20 % flicker to random labels never displaces an 80 % majority.
+  std::mt19937 rng(5);
+  label = 0;
+  conf = 0;
+  int wrong = 0;
+  for (int i = 0; i < 500; ++i) {
+    const bool flicker = rng() % 5 == 0;
+    compact_label_vote(label, conf, flicker ? static_cast<ClassId>(1 + rng() % 38) : id(Label::kSofa), 1.0f, q);
+    if (i > 20) wrong += label != id(Label::kSofa);
+  }
+  EXPECT_EQ(wrong, 0);
+}
+
+TEST(BayesLayer, TwoObservationsMultiplyAndRenormalise) {
+  const BayesLayerCodec codec(4, 1e-4);
+  std::vector<uint8_t> voxel(8, 0);
+  for (int i = 0; i < 4; ++i) voxel[2 * i + 1] = 255;
+  // Uniform prior, observation P(chair) = 0.6: posterior = 0.6.
+  codec.update(voxel.data(), ClassDistribution::from_label(id(Label::kChair), 0.6f));
+  ClassDistribution d = codec.read(voxel.data());
+  ASSERT_GE(d.count, 1);
+  EXPECT_EQ(d.classes[0], id(Label::kChair));
+  EXPECT_NEAR(d.probabilities[0], 0.6f, 0.6f * 0.03f);
+  // Second observation P(chair) = 0.6 again: 0.36 / (0.36 + 37 * (0.4/37)^2) = 0.36 / 0.3643.
+  codec.update(voxel.data(), ClassDistribution::from_label(id(Label::kChair), 0.6f));
+  d = codec.read(voxel.data());
+  const double expected = 0.36 / (0.36 + 37 * std::pow(0.4 / 37, 2));
+  EXPECT_NEAR(d.probabilities[0], expected, expected * 0.03);
+  // A full probability vector: table 0.7, chair 0.3 against chair prior ~0.99.
+  std::vector<float> probs(kNumClasses, 0.0f);
+  probs[id(Label::kTable)] = 0.7f;
+  probs[id(Label::kChair)] = 0.3f;
+  codec.update(voxel.data(), ClassDistribution::from_probabilities(probs.data(), kNumClasses, 4));
+  d = codec.read(voxel.data());
+  EXPECT_EQ(d.classes[0], id(Label::kChair));
+  EXPECT_EQ(d.classes[1], id(Label::kTable));
+  double sum = 0;
+  for (int i = 0; i < d.count; ++i) sum += d.probabilities[i];
+  EXPECT_LE(sum, 1.03);
+}
+
+TEST(BayesLayer, TopKKeepsTheMostProbable) {
+  const BayesLayerCodec codec(2, 1e-3);
+  std::vector<uint8_t> voxel(4, 0);
+  voxel[1] = voxel[3] = 255;
+  std::vector<float> probs(kNumClasses, 0.0f);
+  probs[3] = 0.5f;
+  probs[5] = 0.3f;
+  probs[7] = 0.2f;
+  const ClassDistribution obs = ClassDistribution::from_probabilities(probs.data(), kNumClasses, 8);
+  EXPECT_EQ(obs.count, 3);
+  codec.update(voxel.data(), obs);
+  EXPECT_EQ(voxel[0], 3);
+  EXPECT_EQ(voxel[2], 5);
+  // Floor keeps the update recoverable: repeated class 7 observations take over.
+  probs.assign(kNumClasses, 0.0f);
+  probs[7] = 0.9f;
+  probs[3] = 0.1f;
+  for (int i = 0; i < 5; ++i) codec.update(voxel.data(), ClassDistribution::from_probabilities(probs.data(), kNumClasses, 8));
+  EXPECT_EQ(BayesLayerCodec::argmax(voxel.data()), 7);
+}
+
+TEST(BlockHashTable, MatchesUnorderedMapUnderInsertErase) {
+  BlockHashTable table;
+  std::unordered_map<BlockIndex, int32_t, BlockHash> ref;
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> coord(-40, 40);
+  for (int i = 0; i < 20000; ++i) {
+    const BlockIndex b(coord(rng), coord(rng), coord(rng) / 8);
+    if (rng() % 3 == 0) {
+      table.erase(b);
+      ref.erase(b);
+    } else if (!ref.count(b)) {
+      table.insert(b, i);
+      ref[b] = i;
+    }
+  }
+  EXPECT_EQ(table.size(), ref.size());
+  for (const auto& [k, v] : ref) EXPECT_EQ(table.find(k), v);
+  for (int i = 0; i < 2000; ++i) {
+    const BlockIndex b(coord(rng), coord(rng), coord(rng) / 8);
+    EXPECT_EQ(table.find(b), ref.count(b) ? ref[b] : -1);
+  }
+}
+
+TEST(TsdfMap, RemoveKeepsLookupsConsistent) {
+  TsdfConfig cfg;
+  TsdfMap map(cfg);
+  for (int i = 0; i < 100; ++i) map.allocate_block(BlockIndex(i, -i, i % 7));
+  EXPECT_EQ(map.num_blocks(), 100u);
+  EXPECT_EQ(map.bytes_per_voxel(), 5u);  // core 4 + vote 1
+  size_t far = 0;
+  for (int i = 0; i < 100; ++i) {
+    const Eigen::Vector3f c = (Eigen::Vector3f(i, -i, i % 7) * 0.16f).array() + 0.08f;
+    far += c.norm() > 5.0f;
+  }
+  ASSERT_GT(far, 0u);
+  EXPECT_EQ(map.remove_blocks_beyond(Eigen::Vector3f::Zero(), 5.0f), far);
+  EXPECT_EQ(map.num_blocks(), 100 - far);
+  for (const auto& b : map.blocks()) EXPECT_EQ(map.find_block(b->index), b.get());
+  EXPECT_EQ(map.take_removed_blocks().size(), far);
+}
+
+}  // namespace
+}  // namespace semap
