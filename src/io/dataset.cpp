@@ -33,17 +33,19 @@ bool is_ycb_layout(const fs::path& root) {
 
 /// Layout name from the files present; throws listing what was looked for.
 std::string detect_layout(const fs::path& root) {
-  if (fs::exists(root / "associations.txt") || fs::exists(root / "camera-intrinsics.txt") ||
-      has_file_named(root, "frame-", ".color."))
+  // Not associations.txt alone: TUM users write one with associate.py too.
+  if (fs::exists(root / "camera-intrinsics.txt") || has_file_named(root, "frame-", ".color."))
     return "7scenes";
   if (is_ycb_layout(root)) return "ycb";
   if (fs::exists(root / "scene.json") || fs::exists(root / "label.txt"))
     throw Error(root, "looks like the synthetic layout (scene.json/label.txt) but has no dataset.yaml naming the camera");
   if (fs::exists(root / "rgb.txt") || fs::exists(root / "depth.txt")) return "tum";
   throw Error(root, "no known dataset layout: looked for dataset.yaml, TUM (rgb.txt + depth.txt), 7-Scenes "
-                    "(frame-XXXXXX.color.jpg / associations.txt / camera-intrinsics.txt), YCB-Video "
+                    "(frame-XXXXXX.color.jpg / camera-intrinsics.txt), YCB-Video "
                     "(data/NNNN/XXXXXX-color.png) and synthetic (dataset.yaml + label.txt)");
 }
+
+std::unique_ptr<DatasetReader> open_layout(const fs::path& root, const DatasetOptions& options);
 
 }  // namespace
 
@@ -103,6 +105,15 @@ std::unique_ptr<DatasetReader> open_dataset(const fs::path& folder, const Datase
   std::error_code ec;
   if (!fs::exists(root, ec)) throw Error(root, "dataset folder not found");
   if (!fs::is_directory(root, ec)) throw Error(root, "not a folder (expected a dataset folder)");
+  try {
+    return open_layout(root, options);
+  } catch (const fs::filesystem_error& e) {
+    throw Error(e.path1().empty() ? root : e.path1(), e.code().message());
+  }
+}
+
+namespace {
+std::unique_ptr<DatasetReader> open_layout(const fs::path& root, const DatasetOptions& options) {
   std::optional<io_detail::DatasetYaml> yaml;
   if (fs::exists(root / "dataset.yaml")) yaml = io_detail::read_dataset_yaml(root / "dataset.yaml");
   const std::string layout = yaml && !yaml->format.empty() ? yaml->format : detect_layout(root);
@@ -116,6 +127,8 @@ std::unique_ptr<DatasetReader> open_dataset(const fs::path& folder, const Datase
   if (reader->size() == 0) throw Error(root, "dataset has no frames");
   return reader;
 }
+
+}  // namespace
 
 CameraModel tum_camera_preset(int freiburg) {
   // Published TUM RGB-D calibrations (ROS default for depth scale 5000 = 1/5 mm).

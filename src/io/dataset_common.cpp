@@ -106,16 +106,9 @@ void attach_ground_truth(std::vector<FrameRecord>& records, const Trajectory& tr
 
 // ------------------------------------------------------------------ dataset.yaml
 
-DatasetYaml read_dataset_yaml(const fs::path& file) {
-  DatasetYaml yaml;
-  yaml.file = file;
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(file.string());
-  } catch (const YAML::Exception& e) {
-    throw Error(file, std::string("malformed YAML: ") + e.what());
-  }
-  if (!root.IsMap()) throw Error(file, "expected a map with 'format' and 'camera'");
+namespace {
+
+void read_top_level(const YAML::Node& root, const fs::path& file, DatasetYaml& yaml) {
   for (const auto& kv : root) {
     const std::string key = kv.first.as<std::string>();
     if (key == "format") {
@@ -128,10 +121,7 @@ DatasetYaml read_dataset_yaml(const fs::path& file) {
       throw Error(file, "unknown key '" + key + "'");
     }
   }
-  return yaml;
 }
-
-namespace {
 
 double yaml_number(const YAML::Node& node, const std::string& file, const std::string& key) {
   try {
@@ -140,6 +130,12 @@ double yaml_number(const YAML::Node& node, const std::string& file, const std::s
   } catch (const YAML::Exception&) {
   }
   throw Error(file, "'" + key + "' must be a finite number");
+}
+
+int yaml_size(const YAML::Node& node, const std::string& file, const std::string& key) {
+  const double v = yaml_number(node, file, key);
+  if (v < 1 || v > 16384 || v != std::floor(v)) throw Error(file, "'" + key + "' must be an integer in 1..16384");
+  return static_cast<int>(v);
 }
 
 void apply_intrinsics(const YAML::Node& map, const std::string& file, const std::string& prefix,
@@ -151,8 +147,8 @@ void apply_intrinsics(const YAML::Node& map, const std::string& file, const std:
     else if (key == "fy") k.fy = yaml_number(kv.second, file, full);
     else if (key == "cx") k.cx = yaml_number(kv.second, file, full);
     else if (key == "cy") k.cy = yaml_number(kv.second, file, full);
-    else if (key == "width") k.width = static_cast<int>(yaml_number(kv.second, file, full));
-    else if (key == "height") k.height = static_cast<int>(yaml_number(kv.second, file, full));
+    else if (key == "width") k.width = yaml_size(kv.second, file, full);
+    else if (key == "height") k.height = yaml_size(kv.second, file, full);
     else if (key == "depth_scale" && depth_scale) *depth_scale = yaml_number(kv.second, file, full);
     else if (key == "T_depth_colour" && T_depth_colour) {
       if (!kv.second.IsSequence() || kv.second.size() != 16) throw Error(file, "'" + full + "' must list 16 numbers");
@@ -167,24 +163,42 @@ void apply_intrinsics(const YAML::Node& map, const std::string& file, const std:
     }
   }
   if (!(k.fx > 0 && k.fy > 0)) throw Error(file, "'" + prefix + "fx/fy' must be positive");
-  if (k.width <= 0 || k.height <= 0 || k.width > 16384 || k.height > 16384)
-    throw Error(file, "'" + prefix + "width/height' must be in 1..16384");
 }
 
-}  // namespace
-
-void apply_yaml_camera(const DatasetYaml* yaml, CameraModel& camera) {
-  if (!yaml || !yaml->camera) return;
-  const std::string file = yaml->file.string();
+void apply_camera_node(const YAML::Node& node, const std::string& file, CameraModel& camera) {
   bool has_colour = false;
-  apply_intrinsics(yaml->camera, file, "camera.", camera.depth, &camera.depth_scale, nullptr, &has_colour);
+  apply_intrinsics(node, file, "camera.", camera.depth, &camera.depth_scale, nullptr, &has_colour);
   if (!(camera.depth_scale > 0)) throw Error(file, "'camera.depth_scale' must be positive");
   if (has_colour) {
     CameraModel::ColourCamera colour;
     colour.intrinsics = camera.depth;  // unspecified keys default to the depth camera's
-    apply_intrinsics(yaml->camera["colour"], file, "camera.colour.", colour.intrinsics, nullptr,
-                     &colour.T_depth_colour, nullptr);
+    apply_intrinsics(node["colour"], file, "camera.colour.", colour.intrinsics, nullptr, &colour.T_depth_colour,
+                     nullptr);
     camera.colour = colour;
+  }
+}
+
+}  // namespace
+
+DatasetYaml read_dataset_yaml(const fs::path& file) {
+  DatasetYaml yaml;
+  yaml.file = file;
+  try {
+    const YAML::Node root = YAML::LoadFile(file.string());
+    if (!root.IsMap()) throw Error(file, "expected a map with 'format' and 'camera'");
+    read_top_level(root, file, yaml);
+  } catch (const YAML::Exception& e) {
+    throw Error(file, std::string("malformed YAML: ") + e.what());
+  }
+  return yaml;
+}
+
+void apply_yaml_camera(const DatasetYaml* yaml, CameraModel& camera) {
+  if (!yaml || !yaml->camera) return;
+  try {
+    apply_camera_node(yaml->camera, yaml->file.string(), camera);
+  } catch (const YAML::Exception& e) {
+    throw Error(yaml->file, std::string("malformed camera section: ") + e.what());
   }
 }
 

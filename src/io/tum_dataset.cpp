@@ -44,7 +44,7 @@ std::unique_ptr<DatasetReader> open_tum(const fs::path& root, const DatasetYaml*
     apply_yaml_camera(yaml, camera);
   } else {
     // The folder name, else the bag name in rgb.txt's header ("# file: 'rgbd_dataset_freiburg1_rpy.bag'").
-    int freiburg = freiburg_in(fs::absolute(root).lexically_normal().string());
+    int freiburg = freiburg_in(fs::absolute(root).lexically_normal().filename().string());
     if (freiburg == 0) freiburg = freiburg_in(read_file_bytes(rgb_list).substr(0, 512));
     if (freiburg == 0) {
       spdlog::warn("{}: cannot tell fr1/fr2/fr3 from the folder name; using the freiburg1 intrinsics "

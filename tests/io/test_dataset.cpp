@@ -61,7 +61,7 @@ TEST(Datasets, TumFr1RpyAllFrames) {
   EXPECT_EQ(reader->format(), "tum");
   ASSERT_EQ(reader->size(), 200u);  // every colour frame has a depth map within 0.02 s (associate.py: 200)
   const CameraModel& cam = reader->camera();
-  EXPECT_DOUBLE_EQ(cam.depth.fx, 517.3);  // freiburg1 preset from the rgb.txt header
+  EXPECT_DOUBLE_EQ(cam.depth.fx, 517.3);  // freiburg1 preset from the folder name "tum_fr1_rpy"
   EXPECT_DOUBLE_EQ(cam.depth.cy, 255.3);
   EXPECT_DOUBLE_EQ(cam.depth_scale, 5000.0);
   EXPECT_FALSE(cam.colour.has_value());
@@ -137,6 +137,11 @@ TEST(Datasets, YcbVideoLabelsAndPoses) {
   // The camera barely moves over these 10 frames (a slow hand-held video).
   const Trajectory gt = reader->ground_truth();
   EXPECT_LT((gt.front().T_world_camera.translation() - gt.back().T_world_camera.translation()).norm(), 0.05);
+  // Opening the video folder itself finds the intrinsics and poses two levels up.
+  const auto video = open_dataset(root / "data" / "0000" / "");
+  EXPECT_EQ(video->size(), 10u);
+  EXPECT_DOUBLE_EQ(video->camera().depth.cy, 241.3109);
+  EXPECT_TRUE(video->has_ground_truth());
 }
 
 // ---------------------------------------------------------------- generated folders
@@ -171,6 +176,9 @@ TEST(Datasets, GeneratedTumFolderWithPresetFromName) {
   fs::remove(dir / "dataset.yaml");
   EXPECT_TRUE(throws_naming([&] { open_dataset(dir)->load(0); }, "expected 640x480"));
   EXPECT_DOUBLE_EQ(open_dataset(dir)->camera().depth.fx, 520.9);  // freiburg2 from the folder name
+  // An associations.txt written by TUM's associate.py keeps it a TUM folder (not 7-Scenes).
+  test::write_text(dir / "associations.txt", "100 rgb/100.000000.png 100.004 depth/100.000000.png\n");
+  EXPECT_EQ(open_dataset(dir)->format(), "tum");
 
   test::write_text(dir / "dataset.yaml", "format: tum\ncamera: {fx: 100, fy: 101, cx: 32, cy: 24, width: 64, height: 48, depth_scale: 5000}\n");
   reader = open_dataset(dir);
@@ -261,6 +269,8 @@ TEST(DatasetBadInput, FoldersAndLists) {
   EXPECT_TRUE(throws_naming([&] { open_dataset(dir); }, "rgb.txt:3: timestamp not increasing"));
   test::write_text(dir / "rgb.txt", lines[0] + "nan rgb/x.png\n");
   EXPECT_TRUE(throws_naming([&] { open_dataset(dir); }, "rgb.txt:2"));
+  test::write_text(dir / "rgb.txt", "# no frames\n");
+  EXPECT_TRUE(throws_naming([&] { open_dataset(dir); }, "no frames"));
   test::write_text(dir / "rgb.txt", rgb);
 
   const std::string gt = test::read_bytes(dir / "groundtruth.txt");
@@ -277,6 +287,12 @@ TEST(DatasetBadInput, FoldersAndLists) {
   test::write_text(dir / "dataset.yaml", "format: kinect\n");
   EXPECT_TRUE(throws_naming([&] { open_dataset(dir); }, "dataset.yaml"));
   test::write_text(dir / "dataset.yaml", "camera: {fx: -5}\n");
+  EXPECT_TRUE(throws_naming([&] { open_dataset(dir); }, "dataset.yaml"));
+  test::write_text(dir / "dataset.yaml", "camera: {width: 1e30}\n");
+  EXPECT_TRUE(throws_naming([&] { open_dataset(dir); }, "dataset.yaml"));
+  test::write_text(dir / "dataset.yaml", "? [a, b]\n: 1\n");
+  EXPECT_TRUE(throws_naming([&] { open_dataset(dir); }, "dataset.yaml"));
+  test::write_text(dir / "dataset.yaml", "- just\n- a list\n");
   EXPECT_TRUE(throws_naming([&] { open_dataset(dir); }, "dataset.yaml"));
   fs::remove(dir / "dataset.yaml");
 }
