@@ -1,0 +1,309 @@
+#include "eval/object_metrics.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+
+#include "core/error.hpp"
+#include "io/ply_io.hpp"
+
+namespace semap {
+namespace {
+
+using VoxelSet = std::vector<uint64_t>;  // sorted, unique packed voxel keys
+
+VoxelSet voxelize(const std::vector<Eigen::Vector3f>& points, double voxel_size) {
+  VoxelSet keys;
+  keys.reserve(points.size());
+  constexpr int64_t kOffset = 1 << 20;  // 21 bits per axis: +-2^20 voxels
+  for (const auto& p : points) {
+    if (!p.allFinite()) continue;
+    uint64_t key = 0;
+    for (int a = 0; a < 3; ++a) {
+      const int64_t v = static_cast<int64_t>(std::floor(p[a] / voxel_size)) + kOffset;
+      key = (key << 21) | static_cast<uint64_t>(std::clamp<int64_t>(v, 0, (1 << 21) - 1));
+    }
+    keys.push_back(key);
+  }
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  return keys;
+}
+
+size_t intersection_size(const VoxelSet& a, const VoxelSet& b) {
+  size_t n = 0;
+  auto i = a.begin(), j = b.begin();
+  while (i != a.end() && j != b.end()) {
+    if (*i < *j) ++i;
+    else if (*j < *i) ++j;
+    else { ++n; ++i; ++j; }
+  }
+  return n;
+}
+
+double iou(const VoxelSet& a, const VoxelSet& b) {
+  if (a.empty() || b.empty()) return 0.0;
+  if (a.back() < b.front() || b.back() < a.front()) return 0.0;
+  const size_t inter = intersection_size(a, b);
+  return static_cast<double>(inter) / static_cast<double>(a.size() + b.size() - inter);
+}
+
+nlohmann::json read_json(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) throw Error(path, "cannot open");
+  std::stringstream text;
+  text << in.rdbuf();
+  try {
+    return nlohmann::json::parse(text.str());
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(path, std::string("malformed JSON: ") + e.what());
+  }
+}
+
+ClassId class_of(const nlohmann::json& object) {
+  if (object.contains("class_id") && object["class_id"].is_number_integer()) {
+    const int c = object["class_id"].get<int>();
+    if (c >= 0 && c < kNumClasses) return static_cast<ClassId>(c);
+  }
+  if (object.contains("class") && object["class"].is_string())
+    if (auto c = class_from_name(object["class"].get<std::string>())) return *c;
+  return id(Label::kOther);
+}
+
+Eigen::Vector3d vec3(const nlohmann::json& j, const char* key) {
+  const auto& a = j.at(key);
+  if (!a.is_array() || a.size() != 3) throw std::invalid_argument(std::string(key) + " needs 3 numbers");
+  return {a[0].get<double>(), a[1].get<double>(), a[2].get<double>()};
+}
+
+// Samples the six faces of an oriented box (rotation row-major world_from_box, full extents).
+void sample_box_surface(const nlohmann::json& obb, double spacing, std::vector<Eigen::Vector3f>& out) {
+  const Eigen::Vector3d center = vec3(obb, "center");
+  const Eigen::Vector3d half = 0.5 * vec3(obb, "extent");
+  const auto& r = obb.at("rotation");
+  if (!r.is_array() || r.size() != 9) throw std::invalid_argument("rotation needs 9 numbers");
+  Eigen::Matrix3d R;
+  for (int k = 0; k < 9; ++k) R(k / 3, k % 3) = r[k].get<double>();
+  if (!half.allFinite() || (half.array() < 0).any() || !R.allFinite())
+    throw std::invalid_argument("invalid box");
+  for (int axis = 0; axis < 3; ++axis) {
+    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+    const int nu = std::max(1, static_cast<int>(std::ceil(2 * half[u] / spacing)));
+    const int nv = std::max(1, static_cast<int>(std::ceil(2 * half[v] / spacing)));
+    for (double side : {-1.0, 1.0})
+      for (int iu = 0; iu <= nu; ++iu)
+        for (int iv = 0; iv <= nv; ++iv) {
+          Eigen::Vector3d local;
+          local[axis] = side * half[axis];
+          local[u] = -half[u] + 2 * half[u] * iu / nu;
+          local[v] = -half[v] + 2 * half[v] * iv / nv;
+          out.push_back((center + R * local).cast<float>());
+        }
+  }
+}
+
+}  // namespace
+
+ObjectEvaluation evaluate_objects(const std::vector<EvalObject>& gt, const std::vector<EvalObject>& map,
+                                  const ObjectEvalOptions& options) {
+  if (!(options.voxel_size_m > 0.0)) throw Error("object eval", "voxel size must be > 0");
+  ObjectEvaluation result;
+  result.gt_objects = gt.size();
+  result.map_objects = map.size();
+
+  std::map<ClassId, ObjectClassCount> counts;
+  for (const auto& g : gt) ++counts[g.class_id].gt;
+  for (const auto& m : map) ++counts[m.class_id].map;
+  for (auto& [c, count] : counts) {
+    count.class_id = c;
+    result.counts.push_back(count);
+  }
+
+  std::vector<VoxelSet> gt_voxels, map_voxels;
+  for (const auto& g : gt) gt_voxels.push_back(voxelize(g.points, options.voxel_size_m));
+  for (const auto& m : map) map_voxels.push_back(voxelize(m.points, options.voxel_size_m));
+
+  std::vector<double> ious(gt.size() * map.size(), 0.0);
+  for (size_t i = 0; i < gt.size(); ++i)
+    for (size_t j = 0; j < map.size(); ++j) ious[i * map.size() + j] = iou(gt_voxels[i], map_voxels[j]);
+
+  // METHODS.md C6: WOv weighted by GT voxel count.
+  double weight_sum = 0.0, wov_sum = 0.0, wov_same_sum = 0.0;
+  for (size_t i = 0; i < gt.size(); ++i) {
+    GtObjectScore score;
+    score.gt_id = gt[i].id;
+    score.class_id = gt[i].class_id;
+    score.voxels = gt_voxels[i].size();
+    for (size_t j = 0; j < map.size(); ++j) {
+      const double v = ious[i * map.size() + j];
+      if (v > score.best_iou) {
+        score.best_iou = v;
+        score.best_map_id = map[j].id;
+      }
+      if (map[j].class_id == gt[i].class_id) score.best_iou_same_class = std::max(score.best_iou_same_class, v);
+    }
+    const double w = static_cast<double>(score.voxels);
+    weight_sum += w;
+    wov_sum += w * score.best_iou;
+    wov_same_sum += w * score.best_iou_same_class;
+    result.per_gt.push_back(score);
+  }
+  if (weight_sum > 0) {
+    result.wov = wov_sum / weight_sum;
+    result.wov_same_class = wov_same_sum / weight_sum;
+  }
+
+  // Greedy one-to-one same-class matching by descending IoU, per threshold.
+  struct Candidate { double iou; size_t i, j; };
+  std::vector<Candidate> candidates;
+  for (size_t i = 0; i < gt.size(); ++i)
+    for (size_t j = 0; j < map.size(); ++j)
+      if (gt[i].class_id == map[j].class_id && ious[i * map.size() + j] > 0.0)
+        candidates.push_back({ious[i * map.size() + j], i, j});
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [](const Candidate& a, const Candidate& b) { return a.iou > b.iou; });
+  for (double threshold : options.iou_thresholds) {
+    ObjectMatchStats stats;
+    stats.iou_threshold = threshold;
+    std::vector<bool> gt_used(gt.size(), false), map_used(map.size(), false);
+    for (const auto& c : candidates) {
+      if (c.iou < threshold) break;
+      if (gt_used[c.i] || map_used[c.j]) continue;
+      gt_used[c.i] = map_used[c.j] = true;
+      ++stats.true_positives;
+    }
+    const double tp = static_cast<double>(stats.true_positives);
+    stats.precision = map.empty() ? 0.0 : tp / static_cast<double>(map.size());
+    stats.recall = gt.empty() ? 0.0 : tp / static_cast<double>(gt.size());
+    result.matches.push_back(stats);
+  }
+  return result;
+}
+
+std::vector<EvalObject> gt_objects_from_points(const PointCloud& cloud) {
+  if (!cloud.has_instances() || cloud.instances.size() != cloud.size())
+    throw Error("ground truth", "points carry no 'instance' property");
+  if (!cloud.has_labels() || cloud.labels.size() != cloud.size())
+    throw Error("ground truth", "points carry no 'label' property");
+  std::map<uint32_t, EvalObject> objects;
+  std::map<uint32_t, std::vector<size_t>> votes;
+  for (size_t k = 0; k < cloud.size(); ++k) {
+    const uint32_t inst = cloud.instances[k];
+    if (inst == 0) continue;  // stuff
+    auto& o = objects[inst];
+    o.id = inst;
+    o.points.push_back(cloud.points[k]);
+    auto& v = votes[inst];
+    if (v.empty()) v.assign(kNumClasses, 0);
+    if (cloud.labels[k] < kNumClasses) ++v[cloud.labels[k]];
+  }
+  std::vector<EvalObject> out;
+  for (auto& [inst, o] : objects) {
+    const auto& v = votes[inst];
+    // Majority of the non-zero labels.
+    o.class_id = static_cast<ClassId>(std::max_element(v.begin() + 1, v.end()) - v.begin());
+    if (v[o.class_id] == 0) o.class_id = 0;
+    out.push_back(std::move(o));
+  }
+  return out;
+}
+
+std::vector<EvalObject> gt_objects_from_scene_json(const std::filesystem::path& path, double spacing) {
+  const nlohmann::json scene = read_json(path);
+  if (!scene.contains("objects") || !scene["objects"].is_array()) throw Error(path, "no \"objects\" array");
+  std::vector<EvalObject> out;
+  size_t k = 0;
+  for (const auto& jo : scene["objects"]) {
+    try {
+      EvalObject o;
+      o.id = jo.at("instance_id").get<uint32_t>();
+      o.class_id = class_of(jo);
+      if (jo.contains("primitives") && jo["primitives"].is_array() && !jo["primitives"].empty()) {
+        for (const auto& prim : jo["primitives"]) sample_box_surface(prim, spacing, o.points);
+      } else {
+        sample_box_surface(jo.at("obb"), spacing, o.points);
+      }
+      out.push_back(std::move(o));
+    } catch (const std::exception& e) {
+      throw Error(path, "object " + std::to_string(k) + ": " + e.what());
+    }
+    ++k;
+  }
+  return out;
+}
+
+std::vector<EvalObject> load_gt_objects(const std::filesystem::path& path, double spacing) {
+  if (!std::filesystem::exists(path)) throw Error(path, "not found");
+  const std::string ext = path.extension().string();
+  if (ext == ".json") return gt_objects_from_scene_json(path, spacing);
+  if (ext == ".ply") {
+    const TriangleMesh mesh = read_ply(path);
+    try {
+      return gt_objects_from_points(mesh.vertices);
+    } catch (const Error& e) {
+      throw Error(path, e.reason());
+    }
+  }
+  throw Error(path, "ground truth must be scene.json or gt_points.ply");
+}
+
+std::vector<EvalObject> load_map_objects(const std::filesystem::path& objects_json) {
+  const nlohmann::json doc = read_json(objects_json);
+  if (!doc.contains("objects") || !doc["objects"].is_array()) throw Error(objects_json, "no \"objects\" array");
+  const auto folder = objects_json.parent_path();
+  std::vector<EvalObject> out;
+  size_t k = 0;
+  for (const auto& jo : doc["objects"]) {
+    EvalObject o;
+    try {
+      o.id = jo.at("id").get<uint32_t>();
+    } catch (const std::exception& e) {
+      throw Error(objects_json, "object " + std::to_string(k) + ": missing/invalid \"id\"");
+    }
+    o.class_id = class_of(jo);
+    const size_t point_count = jo.contains("point_count") && jo["point_count"].is_number_unsigned()
+                                   ? jo["point_count"].get<size_t>() : 1;
+    if (jo.contains("points_file") && jo["points_file"].is_string()) {
+      const auto file = folder / jo["points_file"].get<std::string>();
+      if (std::filesystem::exists(file) || point_count > 0) o.points = read_ply(file).vertices.points;
+    } else if (point_count > 0) {
+      throw Error(objects_json, "object " + std::to_string(o.id) + " has no \"points_file\"");
+    }
+    out.push_back(std::move(o));
+    ++k;
+  }
+  return out;
+}
+
+ObjectEvaluation evaluate_object_files(const std::filesystem::path& gt_path,
+                                       const std::filesystem::path& objects_json,
+                                       const ObjectEvalOptions& options) {
+  const auto gt = load_gt_objects(gt_path, 0.5 * options.voxel_size_m);
+  const auto map = load_map_objects(objects_json);
+  return evaluate_objects(gt, map, options);
+}
+
+nlohmann::json to_json(const ObjectEvaluation& e) {
+  nlohmann::json counts = nlohmann::json::array();
+  for (const auto& c : e.counts)
+    counts.push_back({{"class", std::string(class_name(c.class_id))}, {"class_id", c.class_id},
+                      {"gt", c.gt}, {"map", c.map}});
+  nlohmann::json matches = nlohmann::json::array();
+  for (const auto& m : e.matches)
+    matches.push_back({{"iou_threshold", m.iou_threshold}, {"true_positives", m.true_positives},
+                       {"precision", m.precision}, {"recall", m.recall}});
+  nlohmann::json per_gt = nlohmann::json::array();
+  for (const auto& g : e.per_gt)
+    per_gt.push_back({{"gt_id", g.gt_id}, {"class", std::string(class_name(g.class_id))},
+                      {"voxels", g.voxels}, {"best_iou", g.best_iou}, {"best_map_id", g.best_map_id},
+                      {"best_iou_same_class", g.best_iou_same_class}});
+  return {{"gt_objects", e.gt_objects}, {"map_objects", e.map_objects}, {"wov", e.wov},
+          {"wov_same_class", e.wov_same_class}, {"counts", counts}, {"matches", matches},
+          {"per_gt", per_gt}};
+}
+
+}  // namespace semap
