@@ -130,29 +130,60 @@ void ObjectMap::associate(const std::vector<ObjectSegment>& segments, size_t fra
       for (size_t b = 0; b < candidates.size(); ++b)
         if (a != b) ++inst.co_association[instances_[candidates[b].second].id];
     }
-    ObjectInstance* target = nullptr;
+    // Extension (config reverse_containment): the segment covers most of an instance of its
+    // own class. Without it a first small glimpse of an object and the fuller later views
+    // become duplicates whenever the later view is mostly new surface.
+    std::unique_ptr<PointKdTree> segment_tree;
+    auto segment_covers = [&](const ObjectInstance& inst) {
+      if (!config_.reverse_containment || inst.class_id() != segment.class_id || inst.points.empty()) return false;
+      if (!segment_tree) segment_tree = std::make_unique<PointKdTree>(points);
+      const float limit_sq = static_cast<float>(config_.overlap_distance * config_.overlap_distance);
+      size_t hits = 0;
+      for (const auto& p : inst.points)
+        if (segment_tree->nearest_sq(p) < limit_sq) ++hits;
+      return hits > config_.reverse_containment_ratio * inst.points.size();
+    };
+    size_t target = instances_.size();
+    std::vector<size_t> covered;  // further same-class instances this segment covers: duplicates
     for (const auto& [d, j] : candidates) {
-      if (overlap(points, instances_[j], config_.overlap_distance) > config_.overlap_ratio) {
-        target = &instances_[j];
-        break;
+      if (target == instances_.size()) {
+        if (overlap(points, instances_[j], config_.overlap_distance) > config_.overlap_ratio || segment_covers(instances_[j]))
+          target = j;
+      } else if (segment_covers(instances_[j])) {
+        covered.push_back(j);
       }
     }
-    if (!target) {
+    if (target == instances_.size()) {
       instances_.emplace_back();
-      target = &instances_.back();
-      target->id = next_id_++;
-      target->score_sum.assign(kNumClasses, 0.0);
-      target->first_frame = frame_index;
-      target->association_count = 1;
-      target->total_associations = 1;
+      auto& created = instances_.back();
+      created.id = next_id_++;
+      created.score_sum.assign(kNumClasses, 0.0);
+      created.first_frame = frame_index;
+      created.association_count = 1;
+      created.total_associations = 1;
+      // The new instance was co-candidate with every candidate of its creating segment (C5).
+      for (const auto& [d, j] : candidates) {
+        ++instances_[j].co_association[created.id];
+        ++created.co_association[instances_[j].id];
+      }
     }
-    add_points(*target, points, colours);
-    target->n += 1;
-    for (size_t k = 0; k < target->score_sum.size() && k < segment.class_scores.size(); ++k)
-      target->score_sum[k] += segment.class_scores[k];
-    target->last_frame = std::max(target->last_frame, frame_index);
-    target->last_step = step;
-    target->changed = true;
+    ObjectInstance& inst = instances_[target];
+    add_points(inst, points, colours);
+    inst.n += 1;
+    for (size_t k = 0; k < inst.score_sum.size() && k < segment.class_scores.size(); ++k)
+      inst.score_sum[k] += segment.class_scores[k];
+    inst.last_frame = std::max(inst.last_frame, frame_index);
+    inst.last_step = step;
+    inst.changed = true;
+    if (!covered.empty()) {
+      for (size_t j : covered) merge_into(inst, instances_[j]);
+      std::sort(covered.rbegin(), covered.rend());
+      for (size_t j : covered) {
+        const uint32_t gone = instances_[j].id;
+        instances_.erase(instances_.begin() + static_cast<std::ptrdiff_t>(j));
+        for (auto& other : instances_) other.co_association.erase(gone);
+      }
+    }
   }
 }
 

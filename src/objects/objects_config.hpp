@@ -33,6 +33,8 @@ struct ObjectsConfig {
   double association_distance = 1.0;  ///< m, d_assoc: centroid distance gate (C4)
   double overlap_distance = 0.03;     ///< m, d_point: a segment point overlaps when an instance point is this close
   double overlap_ratio = 0.5;         ///< r: overlap fraction above which a segment merges (C4)
+  bool reverse_containment = true;    ///< extension: also merge when the segment covers an instance of its class
+  double reverse_containment_ratio = 0.8;  ///< fraction of the instance's points the segment must cover
 
   // --- C5: optimisation ---
   bool enable_optimisation = true;  ///< run C5 every optimise_every frames
@@ -71,6 +73,8 @@ struct ObjectsConfig {
     v.param("association_distance", association_distance, "m", "d_assoc centroid gate (C4)");
     v.param("overlap_distance", overlap_distance, "m", "d_point of the overlap test (C4)");
     v.param("overlap_ratio", overlap_ratio, "", "r, overlap fraction to merge a segment (C4)");
+    v.param("reverse_containment", reverse_containment, "", "extension to C4: merge when the segment covers most of a same-class instance");
+    v.param("reverse_containment_ratio", reverse_containment_ratio, "", "fraction of the instance covered for reverse_containment");
     v.param("enable_optimisation", enable_optimisation, "", "run the C5 optimisation");
     v.param("enable_merge", enable_merge, "", "C5 merge of stable pairs");
     v.param("enable_delete", enable_delete, "", "C5 deletion of rare instances");

@@ -197,6 +197,7 @@ TEST(ObjectsMap, DeletionRule) {
 TEST(ObjectsMap, MergeRuleNeedsCoAssociationOverlapAndSimilarLabels) {
   ObjectsConfig c = toy_config();
   c.overlap_ratio = 0.95;  // force duplicates: partial views do not associate
+  c.reverse_containment = false;
   const ClassId cup = id(Label::kCup), bowl = id(Label::kBowl);
   auto run = [&](ClassId second_class) {
     ObjectMap map(c);

@@ -1,0 +1,151 @@
+#pragma once
+// Shared by the object-map tests on the synthetic world: ground-truth segmentation results,
+// running the mapper over a dataset, per-class counts and WOv (METHODS.md C6) by voxel IoU.
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+#include <unordered_map>
+#include <unordered_set>
+
+#include <opencv2/imgproc.hpp>
+
+#include "core/labels.hpp"
+#include "io/dataset.hpp"
+#include "io/ply_io.hpp"
+#include "objects/object_mapper.hpp"
+#include "synth/segmentation_noise.hpp"
+#include "synth/synth_config.hpp"
+
+namespace semap::test {
+
+/// One instance per ground-truth instance id, class = majority label, one-hot class scores.
+inline SegmentationResult segmentation_from_labels(const cv::Mat& labels, const cv::Mat& instances) {
+  SegmentationResult seg;
+  std::map<uint16_t, std::map<ClassId, int>> votes;
+  for (int v = 0; v < instances.rows; ++v)
+    for (int u = 0; u < instances.cols; ++u) {
+      const uint16_t inst = instances.at<uint16_t>(v, u);
+      if (inst) ++votes[inst][labels.at<uint8_t>(v, u)];
+    }
+  uint16_t next = 1;
+  for (const auto& [inst, classes] : votes) {
+    ClassId best = 0;
+    int best_votes = -1;
+    for (const auto& [c, n] : classes)
+      if (n > best_votes && c != 0) best = c, best_votes = n;
+    if (best == 0) continue;
+    InstanceDetection det;
+    det.id = next++;
+    det.class_id = best;
+    det.score = 1.f;
+    det.class_scores.assign(kNumClasses, 0.f);
+    det.class_scores[best] = 1.f;
+    cv::compare(instances, inst, det.mask, cv::CMP_EQ);
+    det.box = cv::boundingRect(det.mask);
+    seg.instances.push_back(std::move(det));
+  }
+  return seg;
+}
+
+struct MapRunResult {
+  nlohmann::json objects;  // objects.json
+  std::vector<ObjectInstance> instances;
+  ObjectMapperTimings timings;
+};
+
+/// Runs the object mapper over every `frame_step`-th frame with ground-truth poses; with
+/// `noise`, segmentation comes from apply_segmentation_noise (seed = frame index).
+inline MapRunResult run_object_mapper(const std::filesystem::path& dataset, const ObjectsConfig& config,
+                                      const std::optional<SegmentationNoiseParams>& noise, int frame_step) {
+  const auto reader = open_dataset(dataset);
+  ObjectMapper mapper(config, reader->camera());
+  for (size_t i = 0; i < reader->size(); i += frame_step) {
+    const Frame frame = reader->load(i);
+    SegmentationResult seg;
+    if (noise) {
+      const auto [labels, instances] = apply_segmentation_noise(frame.labels, frame.instances, i, *noise);
+      seg = segmentation_from_labels(labels, instances);
+    } else {
+      seg = segmentation_from_labels(frame.labels, frame.instances);
+    }
+    mapper.process(frame, seg, *frame.gt_T_world_camera);
+  }
+  mapper.finish();
+  return {mapper.to_json(), mapper.instances(), mapper.timings()};
+}
+
+struct GtObjects {
+  std::map<uint32_t, std::vector<Eigen::Vector3f>> points;  // instance -> observed surface points
+  std::map<uint32_t, ClassId> classes;
+};
+
+/// Ground-truth objects from gt_points.ply (objects with at least min_points observed points).
+inline GtObjects load_gt_objects(const std::filesystem::path& dataset, size_t min_points = 50) {
+  const TriangleMesh mesh = read_ply(dataset / "gt_points.ply");
+  GtObjects gt;
+  std::map<uint32_t, std::map<ClassId, int>> votes;
+  const auto& cloud = mesh.vertices;
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    const uint32_t inst = cloud.has_instances() ? cloud.instances[i] : 0;
+    if (!inst) continue;
+    gt.points[inst].push_back(cloud.points[i]);
+    ++votes[inst][cloud.has_labels() ? cloud.labels[i] : 0];
+  }
+  for (auto it = gt.points.begin(); it != gt.points.end();) {
+    if (it->second.size() < min_points) {
+      it = gt.points.erase(it);
+      continue;
+    }
+    ClassId best = 0;
+    int n = -1;
+    for (const auto& [c, k] : votes[it->first])
+      if (k > n) best = c, n = k;
+    gt.classes[it->first] = best;
+    ++it;
+  }
+  return gt;
+}
+
+inline std::unordered_set<uint64_t> voxelise(const std::vector<Eigen::Vector3f>& points, double voxel) {
+  std::unordered_set<uint64_t> keys;
+  for (const auto& p : points) {
+    auto cell = [&](float x) { return static_cast<uint64_t>(static_cast<int64_t>(std::floor(x / voxel)) + (1 << 20)) & 0x1FFFFF; };
+    keys.insert((cell(p.x()) << 42) | (cell(p.y()) << 21) | cell(p.z()));
+  }
+  return keys;
+}
+
+/// WOv = sum_i |G_i| max_j IoU(G_i, S_j) / sum_i |G_i| with IoU over occupied voxels (C6).
+inline double weighted_overlap(const GtObjects& gt, const std::vector<ObjectInstance>& predicted, double voxel = 0.03) {
+  std::vector<std::unordered_set<uint64_t>> pred;
+  for (const auto& inst : predicted) pred.push_back(voxelise(inst.points, voxel));
+  double num = 0, den = 0;
+  for (const auto& [inst, pts] : gt.points) {
+    const auto g = voxelise(pts, voxel);
+    double best = 0;
+    for (const auto& s : pred) {
+      size_t inter = 0;
+      for (uint64_t k : g) inter += s.count(k);
+      const double uni = static_cast<double>(g.size() + s.size() - inter);
+      if (uni > 0) best = std::max(best, inter / uni);
+    }
+    num += g.size() * best;
+    den += g.size();
+  }
+  return den > 0 ? num / den : 0.0;
+}
+
+inline std::map<std::string, int> counts_per_class(const std::vector<ObjectInstance>& instances) {
+  std::map<std::string, int> counts;
+  for (const auto& inst : instances) ++counts[std::string(class_name(inst.class_id()))];
+  return counts;
+}
+inline std::map<std::string, int> counts_per_class(const GtObjects& gt) {
+  std::map<std::string, int> counts;
+  for (const auto& [inst, cls] : gt.classes) ++counts[std::string(class_name(cls))];
+  return counts;
+}
+
+}  // namespace semap::test
