@@ -105,9 +105,13 @@ cv::Mat render_topdown(const TriangleMesh& mesh, const Trajectory& trajectory,
     const auto& tri = mesh.triangles[t];
     cv::Point pts[3];
     for (int k = 0; k < 3; ++k) pts[k] = to_px(verts[tri[k]].cast<double>());
-    Rgb8 c{160, 160, 160};
-    if (labelled) c = class_colour(mesh.vertices.labels[tri[0]]);
-    else if (coloured) c = mesh.vertices.colours[tri[0]];
+    // Class colour where labelled, else the vertex colour, else grey shaded by height.
+    const ClassId label = labelled ? mesh.vertices.labels[tri[0]] : 0;
+    const float rel = std::clamp(static_cast<float>((height - order.front().first) / (cut_h - order.front().first + 1e-6)), 0.f, 1.f);
+    const auto grey = static_cast<uint8_t>(110 + 120 * rel);
+    Rgb8 c{grey, grey, grey};
+    if (label != 0) c = class_colour(label);
+    else if (coloured && !labelled) c = mesh.vertices.colours[tri[0]];
     cv::fillConvexPoly(image, pts, 3, cv::Scalar(c.b, c.g, c.r), cv::LINE_8);
   }
   // Trajectory.

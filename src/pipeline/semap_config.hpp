@@ -6,6 +6,7 @@
 #include "core/params.hpp"
 #include "objects/objects_config.hpp"
 #include "segmentation/segmentation_config.hpp"
+#include "synth/segmentation_noise.hpp"
 #include "tracking/tracking_config.hpp"
 #include "tsdf/tsdf_config.hpp"
 
@@ -31,6 +32,8 @@ struct SemapConfig {
   SegmentationConfig segmentation;
   TsdfConfig tsdf;
   ObjectsConfig objects;
+  /// The built-in noisy segmenter (`--seg-noise`, `semap demo`); flicker_rate is set by the CLI.
+  SegmentationNoiseParams simulated_segmentation;
 
   void visit(ParamVisitor& v) {
     v.section("pipeline", "threads and queues", [&](ParamVisitor& s) { pipeline.visit(s); });
@@ -38,6 +41,8 @@ struct SemapConfig {
     v.section("segmentation", "segmentation (METHODS C1, B1, B2)", [&](ParamVisitor& s) { segmentation.visit(s); });
     v.section("tsdf", "dense semantic TSDF (METHODS B3-B7, A6)", [&](ParamVisitor& s) { tsdf.visit(s); });
     v.section("objects", "object map (METHODS C2-C5)", [&](ParamVisitor& s) { objects.visit(s); });
+    v.section("simulated_segmentation", "built-in noisy segmenter on ground-truth labels (--seg-noise, demo)",
+              [&](ParamVisitor& s) { simulated_segmentation.visit(s); });
   }
   void validate() const {
     pipeline.validate();
@@ -45,6 +50,7 @@ struct SemapConfig {
     segmentation.validate();
     tsdf.validate();
     objects.validate();
+    simulated_segmentation.validate();
   }
 };
 

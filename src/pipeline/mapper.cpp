@@ -1,0 +1,473 @@
+#include "pipeline/mapper.hpp"
+
+#include <spdlog/spdlog.h>
+#include <tbb/global_control.h>
+
+#include <atomic>
+#include <condition_variable>
+#include <map>
+#include <mutex>
+#include <opencv2/imgcodecs.hpp>
+#include <thread>
+
+#include "core/error.hpp"
+#include "core/paths.hpp"
+#include "core/progress.hpp"
+#include "eval/semantic_metrics.hpp"
+#include "eval/trajectory_metrics.hpp"
+#include "io/dataset.hpp"
+#include "io/ply_io.hpp"
+#include "io/trajectory_io.hpp"
+#include "objects/object_mapper.hpp"
+#include "pipeline/bounded_queue.hpp"
+#include "pipeline/report.hpp"
+#include "pipeline/simulated_segmenter.hpp"
+#include "pipeline/stage_timer.hpp"
+#include "segmentation/segmenter_factory.hpp"
+#include "tracking/depth_repair.hpp"
+#include "tracking/tracker.hpp"
+#include "tsdf/semantic_tsdf.hpp"
+
+namespace semap {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+/// A tracked frame on its way to fusion.
+struct TrackedFrame {
+  Frame frame;                 ///< depth is the repaired depth used for tracking
+  Pose T_world_camera;
+  bool segment = false;        ///< sent to the segmenter; fusion waits for its labels
+};
+
+/// What fusion hands to the object map.
+struct ObjectWork {
+  Frame frame;
+  SegmentationResult segmentation;
+  Pose T_world_camera;
+};
+
+/// Labels of segmented frames, PNG-compressed in memory, so the final map refresh can
+/// re-integrate them with optimised poses without keeping full images (bounded memory).
+class LabelArchive {
+ public:
+  void store(size_t frame_index, const cv::Mat& labels) {
+    if (labels.empty()) return;
+    std::vector<uchar> png;
+    cv::imencode(".png", labels, png);
+    std::lock_guard lock(mutex_);
+    archive_[frame_index] = std::move(png);
+  }
+  cv::Mat find(size_t frame_index) const {
+    std::lock_guard lock(mutex_);
+    const auto it = archive_.find(frame_index);
+    return it == archive_.end() ? cv::Mat() : cv::imdecode(it->second, cv::IMREAD_UNCHANGED);
+  }
+  size_t bytes() const {
+    std::lock_guard lock(mutex_);
+    size_t n = 0;
+    for (const auto& [k, v] : archive_) n += v.size();
+    return n;
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  std::map<size_t, std::vector<uchar>> archive_;
+};
+
+/// Results of the asynchronous segmentation stage, keyed by the frame they were computed on.
+class SegmentationResults {
+ public:
+  void put(size_t frame_index, std::optional<SegmentationResult> result) {
+    std::lock_guard lock(mutex_);
+    results_[frame_index] = std::move(result);
+    ready_.notify_all();
+  }
+  /// The result for frame_index if it has arrived (nullopt inside means "dropped / failed").
+  std::optional<std::optional<SegmentationResult>> take(size_t frame_index) {
+    std::lock_guard lock(mutex_);
+    auto it = results_.find(frame_index);
+    if (it == results_.end()) return std::nullopt;
+    auto out = std::move(it->second);
+    results_.erase(it);
+    return out;
+  }
+  std::optional<SegmentationResult> wait_take(size_t frame_index) {
+    std::unique_lock lock(mutex_);
+    ready_.wait(lock, [&] { return results_.count(frame_index) > 0; });
+    auto out = std::move(results_[frame_index]);
+    results_.erase(frame_index);
+    return out;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable ready_;
+  std::map<size_t, std::optional<SegmentationResult>> results_;
+};
+
+std::unique_ptr<Segmenter> build_segmenter(const RunOptions& options, const SemapConfig& config,
+                                           const DatasetReader& dataset) {
+  const std::string spec = options.segmenter.empty() ? config.segmentation.segmenter : options.segmenter;
+  const bool simulated = options.seg_noise > 0;
+  if ((spec == "groundtruth" || simulated) && !dataset.has_label_ground_truth())
+    throw Error(dataset.root(), "--segmenter groundtruth / --seg-noise need per-frame label images, this dataset has none");
+  if (simulated) {
+    SegmentationNoiseParams noise = config.simulated_segmentation;
+    noise.flicker_rate = options.seg_noise;
+    return std::make_unique<SimulatedSegmenter>(make_segmenter("groundtruth", config.segmentation, dataset.camera()),
+                                                noise, 1);
+  }
+  return make_segmenter(spec, config.segmentation, dataset.camera());
+}
+
+/// Ground-truth poses when present, or nullopt.
+std::optional<Pose> usable_pose(const std::optional<Pose>& pose) {
+  if (pose && is_valid_pose(*pose, 1e-4)) return pose;
+  return std::nullopt;
+}
+
+nlohmann::json objects_per_class(const ObjectMapper& objects) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const auto& inst : objects.instances()) {
+    const std::string name(class_name(inst.class_id()));
+    j[name] = j.value(name, 0) + 1;
+  }
+  return j;
+}
+
+std::vector<ReportObject> report_objects(const nlohmann::json& objects_json) {
+  std::vector<ReportObject> out;
+  for (const auto& o : objects_json.value("objects", nlohmann::json::array())) {
+    ReportObject r;
+    r.id = o.value("id", 0u);
+    r.class_id = static_cast<ClassId>(o.value("class_id", 0));
+    const auto& obb = o["obb"];
+    Eigen::Vector3d c(obb["center"][0], obb["center"][1], obb["center"][2]);
+    Eigen::Vector3d e(obb["extent"][0], obb["extent"][1], obb["extent"][2]);
+    Eigen::Matrix3d R;
+    for (int i = 0; i < 9; ++i) R(i / 3, i % 3) = obb["rotation"][i];
+    for (int k = 0; k < 8; ++k) {
+      const Eigen::Vector3d s((k & 1) ? 0.5 : -0.5, (k & 2) ? 0.5 : -0.5, (k & 4) ? 0.5 : -0.5);
+      r.corners[k] = c + R * s.cwiseProduct(e);
+    }
+    out.push_back(r);
+  }
+  return out;
+}
+
+}  // namespace
+
+nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config) {
+  config.validate();
+  const auto wall_start = Clock::now();
+  const int threads = config.pipeline.threads;
+  tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, threads);
+  const bool sequential = threads == 1;
+
+  auto dataset = open_dataset(options.dataset);
+  const CameraModel& camera = dataset->camera();
+  const size_t frame_count =
+      options.max_frames > 0 ? std::min(options.max_frames, dataset->size()) : dataset->size();
+  if (frame_count == 0) throw Error(options.dataset, "dataset has no frames");
+  const bool use_gt_poses = options.poses == "groundtruth";
+  if (use_gt_poses && !dataset->has_ground_truth())
+    throw Error(options.dataset, "--poses groundtruth needs a ground-truth trajectory, this dataset has none");
+
+  std::error_code ec;
+  std::filesystem::create_directories(options.out_dir, ec);
+  if (ec) throw Error(options.out_dir, "cannot create output folder: " + ec.message());
+
+  std::unique_ptr<Segmenter> segmenter = build_segmenter(options, config, *dataset);
+  std::unique_ptr<Tracker> tracker = use_gt_poses ? nullptr : std::make_unique<Tracker>(config.tracking, camera);
+  SemanticTsdf tsdf(config.tsdf);
+  ObjectMapper objects(config.objects, camera);
+  StageTimings timings;
+  LabelArchive label_archive;
+  SegmentationResults seg_results;
+  const DepthRepairParams repair{config.tracking.depth_repair_radius, config.tracking.depth_repair_gray_threshold,
+                                 config.tracking.depth_repair_min_support};
+
+  std::atomic<size_t> frames_done{0}, skipped_frames{0}, segmented_frames{0}, dropped_segmentations{0};
+  std::atomic<size_t> keyframes{0}, objects_processed{0}, objects_in_map{0};
+  Trajectory online_trajectory;
+
+  // --- stage bodies -------------------------------------------------------------------
+  auto run_segmentation = [&](const Frame& frame) -> std::optional<SegmentationResult> {
+    const auto t0 = Clock::now();
+    try {
+      SegmentationResult r = segmenter->segment(frame);
+      r.frame_index = frame.index;
+      timings.add("segmentation", ms_since(t0));
+      return r;
+    } catch (const Error& e) {
+      spdlog::warn("segmentation of frame {} failed: {}", frame.index, e.what());
+      return std::nullopt;
+    }
+  };
+  auto fuse = [&](TrackedFrame& item, const std::optional<SegmentationResult>& seg) {
+    const auto t0 = Clock::now();
+    IntegrationInput input = make_integration_input(item.frame, camera.depth, item.T_world_camera);
+    input.labels = cv::Mat();
+    if (seg && seg->has_labels()) {
+      input.labels = seg->labels;
+      input.confidence = seg->confidence;
+      input.probabilities = seg->probabilities;
+      label_archive.store(item.frame.index, seg->labels);
+    }
+    tsdf.integrate(input);
+    timings.add("tsdf_integration", ms_since(t0));
+  };
+  auto map_objects = [&](ObjectWork& work) {
+    const auto t0 = Clock::now();
+    objects.process(work.frame, work.segmentation, work.T_world_camera);
+    timings.add("object_map", ms_since(t0));
+    ++objects_processed;
+    objects_in_map = objects.instances().size();
+  };
+
+  // Reads, repairs and tracks frame i. Returns nullopt for a skipped frame.
+  auto track_frame = [&](size_t i) -> std::optional<TrackedFrame> {
+    auto t0 = Clock::now();
+    Frame frame;
+    try {
+      frame = dataset->load(i);
+    } catch (const Error& e) {
+      spdlog::warn("skipping frame {}: {}", i, e.what());
+      ++skipped_frames;
+      return std::nullopt;
+    }
+    timings.add("read", ms_since(t0));
+    TrackedFrame item;
+    t0 = Clock::now();
+    if (use_gt_poses) {
+      const auto pose = usable_pose(frame.gt_T_world_camera);
+      if (!pose) {
+        spdlog::warn("skipping frame {}: no valid ground-truth pose", i);
+        ++skipped_frames;
+        return std::nullopt;
+      }
+      item.T_world_camera = *pose;
+      if (config.tracking.depth_repair) frame.depth = repair_depth(frame.depth, frame.rgb, repair);
+      timings.add("depth_repair", ms_since(t0));
+    } else {
+      const TrackResult r = tracker->track(frame);
+      item.T_world_camera = r.T_world_camera;
+      if (!r.depth.empty()) frame.depth = r.depth;
+      if (r.is_keyframe) ++keyframes;
+      timings.add("tracking", ms_since(t0));
+      item.segment = r.is_keyframe && config.segmentation.on_keyframes;
+    }
+    online_trajectory.push_back({frame.timestamp, item.T_world_camera});
+    item.segment = segmenter && (item.segment || frame.index % config.segmentation.every_n_frames == 0);
+    item.frame = std::move(frame);
+    return item;
+  };
+
+  Progress progress("semap run", frame_count);
+  auto progress_extra = [&] { return "objects " + std::to_string(objects_in_map.load()); };
+
+  if (sequential) {
+    // One thread: the same order every time -> byte-identical outputs (issue 8).
+    for (size_t i = 0; i < frame_count; ++i) {
+      auto item = track_frame(i);
+      if (item) {
+        std::optional<SegmentationResult> seg;
+        if (item->segment) {
+          seg = run_segmentation(item->frame);
+          ++segmented_frames;
+        }
+        fuse(*item, seg);
+        if (seg) {
+          ObjectWork work{std::move(item->frame), std::move(*seg), item->T_world_camera};
+          map_objects(work);
+        }
+      }
+      frames_done = i + 1;
+      if (options.show_progress) progress.update(i + 1, progress_extra());
+    }
+  } else {
+    // Stages on their own threads joined by bounded queues. Tracking never waits for the
+    // network: frames to segment go to a small queue and are dropped when it is full; fusion
+    // holds such frames aside until their labels arrive and meanwhile fuses the others.
+    BoundedQueue<TrackedFrame> fusion_queue(config.pipeline.queue_size);
+    BoundedQueue<Frame> segmentation_queue(static_cast<size_t>(config.segmentation.async_queue_size));
+    BoundedQueue<ObjectWork> object_queue(config.pipeline.queue_size);
+    std::atomic<size_t> segmentation_in_flight{0};
+
+    std::thread segmentation_thread([&] {
+      while (auto frame = segmentation_queue.pop()) {
+        seg_results.put(frame->index, run_segmentation(*frame));
+        --segmentation_in_flight;
+      }
+    });
+    std::thread object_thread([&] {
+      while (auto work = object_queue.pop()) map_objects(*work);
+    });
+    std::thread fusion_thread([&] {
+      std::map<size_t, TrackedFrame> waiting;  // frames held until their labels arrive
+      auto fuse_ready = [&](bool block) {
+        for (auto it = waiting.begin(); it != waiting.end();) {
+          auto result = block ? std::optional(seg_results.wait_take(it->first)) : seg_results.take(it->first);
+          if (!result) { ++it; continue; }
+          fuse(it->second, *result);
+          if (*result) object_queue.push({std::move(it->second.frame), std::move(**result), it->second.T_world_camera});
+          it = waiting.erase(it);
+        }
+      };
+      while (auto item = fusion_queue.pop()) {
+        if (item->segment) {
+          waiting.emplace(item->frame.index, std::move(*item));
+        } else {
+          fuse(*item, std::nullopt);
+        }
+        fuse_ready(false);
+      }
+      fuse_ready(true);
+      object_queue.close();
+    });
+
+    for (size_t i = 0; i < frame_count; ++i) {
+      auto item = track_frame(i);
+      if (item) {
+        if (item->segment) {
+          // Non-blocking hand-off: drop the request when the network is still busy.
+          if (segmentation_in_flight.load() < segmentation_queue.capacity()) {
+            ++segmentation_in_flight;
+            ++segmented_frames;
+            segmentation_queue.push(item->frame);
+          } else {
+            item->segment = false;
+            ++dropped_segmentations;
+          }
+        }
+        fusion_queue.push(std::move(*item));
+      }
+      frames_done = i + 1;
+      if (options.show_progress) progress.update(i + 1, progress_extra());
+    }
+    segmentation_queue.close();
+    fusion_queue.close();
+    segmentation_thread.join();
+    fusion_thread.join();
+    object_thread.join();
+  }
+  const double online_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
+
+  // --- final pose-graph pass and map refresh -------------------------------------------
+  Trajectory trajectory = online_trajectory;
+  bool map_refreshed = false;
+  TrackerStats tracker_stats;
+  if (tracker) {
+    const auto t0 = Clock::now();
+    trajectory = tracker->finish();
+    tracker_stats = tracker->stats();
+    timings.add("pose_graph_final", ms_since(t0));
+    // The map uses the optimised poses: when loop closure moved keyframes, the TSDF is rebuilt
+    // from every frame with its optimised pose and the labels archived for segmented frames.
+    if (tracker_stats.loop_edges > 0) {
+      const auto t1 = Clock::now();
+      SemanticTsdf refreshed(config.tsdf);
+      size_t k = 0;
+      for (size_t i = 0; i < frame_count && k < trajectory.size(); ++i) {
+        Frame frame;
+        try {
+          frame = dataset->load(i);
+        } catch (const Error&) {
+          continue;
+        }
+        while (k < trajectory.size() && trajectory[k].timestamp < frame.timestamp - 1e-9) ++k;
+        if (k >= trajectory.size() || std::abs(trajectory[k].timestamp - frame.timestamp) > 1e-6) continue;
+        if (config.tracking.depth_repair) frame.depth = repair_depth(frame.depth, frame.rgb, repair);
+        IntegrationInput input = make_integration_input(frame, camera.depth, trajectory[k].T_world_camera);
+        input.labels = label_archive.find(frame.index);
+        refreshed.integrate(input);
+      }
+      tsdf = std::move(refreshed);
+      map_refreshed = true;
+      timings.add("map_refresh", ms_since(t1));
+    }
+  }
+  {
+    const auto t0 = Clock::now();
+    objects.finish();
+    timings.add("object_map_final", ms_since(t0));
+  }
+
+  // --- outputs ----------------------------------------------------------------------
+  const auto t_out = Clock::now();
+  write_tum_trajectory(options.out_dir / "trajectory.txt", trajectory);
+  TriangleMesh mesh = tsdf.extract_mesh();
+  timings.add("mesh_extraction", ms_since(t_out));
+  mesh.vertices.instances =
+      objects.instance_ids_for(mesh.vertices.points, static_cast<float>(1.5 * config.tsdf.voxel_size));
+  write_ply(options.out_dir / "mesh.ply", mesh);
+  tsdf.save(options.out_dir / "map.semap");
+  objects.write(options.out_dir);
+  const nlohmann::json objects_json = objects.to_json();
+
+  // --- evaluation against ground truth -----------------------------------------------
+  nlohmann::json evaluation = nlohmann::json::object();
+  if (options.evaluate) {
+    if (!use_gt_poses && dataset->has_ground_truth()) {
+      try {
+        const Trajectory gt = dataset->ground_truth();
+        evaluation["ate"] = to_json(compute_ate(gt, trajectory));
+        evaluation["rpe"] = to_json(compute_rpe(gt, trajectory));
+      } catch (const Error& e) {
+        spdlog::warn("trajectory evaluation skipped: {}", e.what());
+      }
+    }
+    const auto gt_points = dataset->root() / "gt_points.ply";
+    if (std::filesystem::exists(gt_points) && !mesh.vertices.empty()) {
+      const TriangleMesh gt = read_ply(gt_points);
+      evaluation["semantic"] = to_json(evaluate_semantic(gt.vertices, mesh.vertices));
+    }
+  }
+
+  // --- report -------------------------------------------------------------------------
+  const double wall_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
+  nlohmann::json report;
+  report["dataset"] = options.dataset.string();
+  report["summary"] = {
+      {"frames", frames_done.load()},
+      {"frames_skipped", skipped_frames.load()},
+      {"keyframes", tracker ? tracker_stats.keyframes : keyframes.load()},
+      {"segmented_frames", segmented_frames.load()},
+      {"segmentations_dropped", dropped_segmentations.load()},
+      {"object_frames", objects_processed.load()},
+      {"objects", objects.instances().size()},
+      {"poses", options.poses},
+      {"segmenter", segmenter ? segmenter->name() : std::string("none")},
+      {"loop_edges", tracker_stats.loop_edges},
+      {"map_refreshed_with_optimised_poses", map_refreshed},
+      {"mesh_vertices", mesh.vertices.size()},
+      {"mesh_triangles", mesh.triangles.size()},
+      {"fps_online", frames_done.load() / std::max(online_s, 1e-9)},
+      {"wall_s", wall_s},
+      {"peak_rss_mb", peak_rss_bytes() / (1024.0 * 1024.0)},
+      {"threads", threads},
+  };
+  report["objects_per_class"] = objects_per_class(objects);
+  report["evaluation"] = evaluation;
+  report["timings"] = timings_json(timings);
+  if (tracker) {
+    report["tracking"] = {{"keyframes", tracker_stats.keyframes}, {"lost_frames", tracker_stats.lost_frames},
+                          {"relocalisations", tracker_stats.relocalisations}, {"loop_edges", tracker_stats.loop_edges},
+                          {"optimisations", tracker_stats.optimisations}};
+  }
+
+  const cv::Mat topdown = render_topdown(mesh, trajectory, report_objects(objects_json));
+  write_atomic_with(options.out_dir / "topdown.png", [&](const std::filesystem::path& tmp) {
+    if (!cv::imwrite(tmp.string() + ".png", topdown)) throw Error(options.out_dir / "topdown.png", "cannot write");
+    std::filesystem::rename(tmp.string() + ".png", tmp);
+  });
+  write_file_atomic(options.out_dir / "report.json", report.dump(2) + "\n");
+  write_report_html(options.out_dir, report);
+  if (options.show_progress) progress.finish(progress_extra());
+  return report;
+}
+
+}  // namespace semap
