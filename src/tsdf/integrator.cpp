@@ -94,11 +94,13 @@ struct VoxelUpdater {
       c.g = static_cast<uint8_t>(std::lround(a * c.g + b * colour->g));
       c.b = static_cast<uint8_t>(std::lround(a * c.b + b * colour->b));
     }
-    if (label != 0 && std::fabs(d) <= label_band) {
-      if (label_layer) compact_label_vote(v.label, block.label_confidence[li], label, w, wq);
-      if (bayes_layer && observation) bayes.update(&block.bayes[static_cast<size_t>(li) * bayes.bytes_per_voxel()], *observation);
-    }
+    if (label != 0 && std::fabs(d) <= label_band) update_labels(block, li, label, observation);
     return true;
+  }
+  /// Label layers: call once per voxel per frame (one frame, one observation).
+  void update_labels(Block& block, int li, ClassId label, const ClassDistribution* observation) const {
+    if (label_layer) compact_label_vote(block.voxels[li].label, block.label_confidence[li], label);
+    if (bayes_layer && observation) bayes.update(&block.bayes[static_cast<size_t>(li) * bayes.bytes_per_voxel()], *observation);
   }
 };
 
@@ -371,14 +373,30 @@ class GroupedIntegrator final : public Integrator {
     // 6. Apply per block in parallel (each block's updates in ray order: deterministic).
     const VoxelUpdater updater = make_updater(map, f);
     const bool colour = f.colour && map.has_colour_layer();
+    const bool labels = f.labels && (map.has_label_layer() || map.has_bayes_layer());
     tbb::parallel_for(size_t{0}, n_blocks, [&](size_t k) {
       Block& block = *touched.blocks[k];
+      // Labels: one observation per voxel per frame, from the ray whose surface point is nearest.
+      std::array<float, kBlockVoxels> best_d;
+      std::array<int32_t, kBlockVoxels> best_group;
+      if (labels) best_group.fill(-1);
       for (size_t j = offsets_[k]; j < offsets_[k + 1]; ++j) {
         const RayUpdate& u = *order_[j];
         const Group& g = groups_[u.group];
-        updater.update(block, local_index(u.voxel), u.d, g.total_weight, g.label,
-                       want_observation ? &g.observation : nullptr, colour ? &g.colour : nullptr);
+        const int li = local_index(u.voxel);
+        if (!updater.update(block, li, u.d, g.total_weight, 0, nullptr, colour ? &g.colour : nullptr)) continue;
+        if (labels && g.label != 0 && std::fabs(u.d) <= f.label_band &&
+            (best_group[li] < 0 || std::fabs(u.d) < best_d[li])) {
+          best_group[li] = u.group;
+          best_d[li] = std::fabs(u.d);
+        }
       }
+      if (labels)
+        for (int li = 0; li < kBlockVoxels; ++li)
+          if (best_group[li] >= 0) {
+            const Group& g = groups_[best_group[li]];
+            updater.update_labels(block, li, g.label, want_observation ? &g.observation : nullptr);
+          }
       block.mesh_dirty = true;
     });
     stats_.voxel_updates = n_updates;

@@ -43,6 +43,8 @@ MeshExtractor::BlockMesh MeshExtractor::mesh_block(const TsdfMap& map, const Blo
   const bool rgb = map.config().mesh_colour == "rgb" && map.has_colour_layer();
   const float min_weight = static_cast<float>(map.config().mesh_min_weight);
   const int bayes_stride = map.bayes().bytes_per_voxel();
+  const int min_votes = map.config().mesh_min_label_votes;
+  const uint8_t max_bayes_q = map.bayes().encode(static_cast<float>(map.config().mesh_min_label_probability));
   // Gather the 9^3 neighbourhood (this block plus the first layer of its +x/+y/+z neighbours).
   std::array<Sample, kN * kN * kN> samples;
   const Block* neighbours[2][2][2];
@@ -61,7 +63,13 @@ MeshExtractor::BlockMesh MeshExtractor::mesh_block(const TsdfMap& map, const Blo
         if (v.weight_q == 0 || map.weights().decode(v.weight_q) <= min_weight) continue;
         s.valid = true;
         s.sdf = v.sdf();
-        s.label = use_bayes ? BayesLayerCodec::argmax(&b->bayes[static_cast<size_t>(li) * bayes_stride]) : v.label;
+        // Labels with too little evidence (e.g. seen in one frame) are shown as unlabelled.
+        if (use_bayes) {
+          const uint8_t* bayes = &b->bayes[static_cast<size_t>(li) * bayes_stride];
+          s.label = bayes[1] <= max_bayes_q ? BayesLayerCodec::argmax(bayes) : 0;
+        } else {
+          s.label = (b->label_confidence && b->label_confidence[li] >= min_votes) ? v.label : 0;
+        }
         s.colour = rgb ? b->colour[li] : class_colour(s.label);
       }
   BlockMesh mesh;

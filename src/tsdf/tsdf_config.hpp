@@ -35,6 +35,8 @@ struct TsdfConfig {
   // Mesh (B7).
   std::string mesh_colour = "class";  ///< "class" (core/labels.hpp palette) | "rgb"
   double mesh_min_weight = 0.0;       ///< cube corners need a weight above this to be meshed
+  int mesh_min_label_votes = 2;       ///< compact label shown only with this vote margin (else 0)
+  double mesh_min_label_probability = 0.9;  ///< Bayesian argmax shown only above this (else 0)
 
   // Memory for long runs.
   double drop_distance = 0.0;  ///< blocks farther than this from the camera are freed, m (0 = keep all)
@@ -61,6 +63,10 @@ struct TsdfConfig {
     v.param("colour_layer", colour_layer, "", "keep an RGB colour per voxel");
     v.param("mesh_colour", mesh_colour, "", "vertex colour: class (palette) | rgb (colour layer)");
     v.param("mesh_min_weight", mesh_min_weight, "", "cube corners need a weight above this to be meshed");
+    v.param("mesh_min_label_votes", mesh_min_label_votes, "frames",
+            "a vertex shows the compact label only when its vote margin reaches this (else unlabelled)");
+    v.param("mesh_min_label_probability", mesh_min_label_probability, "",
+            "a vertex shows the Bayesian argmax only when its probability reaches this (else unlabelled)");
     v.param("drop_distance", drop_distance, "m", "free blocks farther than this from the camera (0 = never)");
   }
   void validate() const {
@@ -83,6 +89,10 @@ struct TsdfConfig {
     require_param(label_band_voxels > 0, "tsdf.label_band_voxels", "must be > 0");
     require_param(mesh_colour == "class" || mesh_colour == "rgb", "tsdf.mesh_colour", "must be class or rgb");
     require_param(mesh_min_weight >= 0, "tsdf.mesh_min_weight", "must be >= 0");
+    require_param(mesh_min_label_votes >= 0 && mesh_min_label_votes <= 255, "tsdf.mesh_min_label_votes",
+                  "must be in [0, 255]");
+    require_param(mesh_min_label_probability >= 0 && mesh_min_label_probability < 1,
+                  "tsdf.mesh_min_label_probability", "must be in [0, 1)");
     require_param(drop_distance >= 0, "tsdf.drop_distance", "must be >= 0");
   }
 };

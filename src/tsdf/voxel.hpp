@@ -139,25 +139,20 @@ class BayesLayerCodec {
   std::array<float, 256> table_{};
 };
 
-/// Compact label rule (METHODS B6 leaves it open): a weighted Boyer-Moore majority vote. The
-/// voxel keeps its label byte plus a 1-byte vote confidence C (log-quantised like the weight).
-/// Same label: C += w. Different label: C -= w, and when C would go negative the new label
-/// replaces the stored one with confidence |C - w|. A label holding more than half of the
-/// accumulated weight therefore always ends up stored.
-inline void compact_label_vote(ClassId& label, uint8_t& confidence_q, ClassId observed, float w,
-                               const WeightQuantizer& quantizer) {
+/// Compact label rule (METHODS B6 leaves it open): a Boyer-Moore majority vote with one vote
+/// per voxel per frame (frames, not rays, vote: a close-up frame must not outvote many others).
+/// The voxel keeps its label byte plus a 1-byte vote counter C (saturating at 255). Same label:
+/// C += 1. Different label: C -= 1, and at C = 0 the next differing label replaces the stored
+/// one. A label observed in more than half of the frames that saw the voxel ends up stored.
+inline void compact_label_vote(ClassId& label, uint8_t& votes, ClassId observed) {
   if (observed == 0) return;
-  const float c = quantizer.decode(confidence_q);
-  if (label == 0 || confidence_q == 0) {
+  if (votes == 0) {
     label = observed;
-    confidence_q = quantizer.encode(w);
+    votes = 1;
   } else if (label == observed) {
-    confidence_q = quantizer.encode(c + w);
-  } else if (w > c) {
-    label = observed;
-    confidence_q = quantizer.encode(w - c);
+    if (votes < 255) ++votes;
   } else {
-    confidence_q = quantizer.encode(c - w);
+    --votes;
   }
 }
 

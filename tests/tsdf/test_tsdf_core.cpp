@@ -76,26 +76,27 @@ TEST(SemanticGrouping, PicksWeightedMajorityLabelAndItsMean) {
   EXPECT_EQ(group_points(pts).label, id(Label::kChair));  // chair 4.5 > table 4
 }
 
-TEST(CompactLabel, WeightedMajorityVoteOvertakes) {
-  const WeightQuantizer q;
+TEST(CompactLabel, MajorityVoteOvertakes) {
   ClassId label = 0;
-  uint8_t conf = 0;
-  compact_label_vote(label, conf, id(Label::kChair), 1.0f, q);
+  uint8_t votes = 0;
+  compact_label_vote(label, votes, id(Label::kChair));
+  compact_label_vote(label, votes, id(Label::kChair));
   EXPECT_EQ(label, id(Label::kChair));
-  compact_label_vote(label, conf, id(Label::kTable), 0.5f, q);
-  EXPECT_EQ(label, id(Label::kChair));  // 1 - 0.5 left
-  compact_label_vote(label, conf, id(Label::kTable), 0.8f, q);
-  EXPECT_EQ(label, id(Label::kTable));  // overtaken: 0.3 left for table
-  compact_label_vote(label, conf, 0, 10.0f, q);
+  compact_label_vote(label, votes, id(Label::kTable));
+  EXPECT_EQ(label, id(Label::kChair));  // 2 - 1 left
+  compact_label_vote(label, votes, id(Label::kTable));
+  compact_label_vote(label, votes, id(Label::kTable));
+  EXPECT_EQ(label, id(Label::kTable));  // overtaken
+  compact_label_vote(label, votes, 0);
   EXPECT_EQ(label, id(Label::kTable));  // unlabelled pixels never vote
   // 20 % flicker to random labels never displaces an 80 % majority.
   std::mt19937 rng(5);
   label = 0;
-  conf = 0;
+  votes = 0;
   int wrong = 0;
   for (int i = 0; i < 500; ++i) {
     const bool flicker = rng() % 5 == 0;
-    compact_label_vote(label, conf, flicker ? static_cast<ClassId>(1 + rng() % 38) : id(Label::kSofa), 1.0f, q);
+    compact_label_vote(label, votes, flicker ? static_cast<ClassId>(1 + rng() % 38) : id(Label::kSofa));
     if (i > 20) wrong += label != id(Label::kSofa);
   }
   EXPECT_EQ(wrong, 0);
