@@ -10,7 +10,7 @@ struct ObjectsConfig {
   // --- C2: per-keyframe segmentation ---
   std::string segmentation_mode = "supervoxel";  ///< "supervoxel" (C2) or "backprojection" (plain masks)
   int pixel_stride = 2;            ///< use every N-th pixel when building the frame cloud
-  double max_depth = 4.0;          ///< m, ignore depth beyond this
+  double max_depth = 5.0;          ///< m, ignore depth beyond this
   double voxel_resolution = 0.01;  ///< m, VCCS voxel size
   double seed_resolution = 0.06;   ///< m, VCCS seed spacing (supervoxel size)
   double colour_importance = 0.2;  ///< VCCS colour weight

@@ -3,6 +3,9 @@
 // running the mapper over a dataset, per-class counts and WOv (METHODS.md C6) by voxel IoU.
 #include <filesystem>
 #include <map>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
 #include <optional>
 #include <set>
 #include <string>
@@ -21,7 +24,8 @@
 namespace semap::test {
 
 /// One instance per ground-truth instance id, class = majority label, one-hot class scores.
-inline SegmentationResult segmentation_from_labels(const cv::Mat& labels, const cv::Mat& instances) {
+inline SegmentationResult segmentation_from_labels(const cv::Mat& labels, const cv::Mat& instances,
+                                                   int false_positives_min_px = 0) {
   SegmentationResult seg;
   std::map<uint16_t, std::map<ClassId, int>> votes;
   for (int v = 0; v < instances.rows; ++v)
@@ -46,6 +50,29 @@ inline SegmentationResult segmentation_from_labels(const cv::Mat& labels, const 
     det.box = cv::boundingRect(det.mask);
     seg.instances.push_back(std::move(det));
   }
+  if (false_positives_min_px > 0) {
+    // Noisy mode: object-class pixels without an instance (flickered stuff regions) become
+    // false-positive detections, one per connected component.
+    for (int c = 1; c < kNumClasses; ++c) {
+      if (is_stuff(static_cast<ClassId>(c))) continue;
+      cv::Mat region = (labels == c) & (instances == 0);
+      if (cv::countNonZero(region) < false_positives_min_px) continue;
+      cv::Mat components;
+      const int n = cv::connectedComponents(region, components, 8, CV_32S);
+      for (int k = 1; k < n; ++k) {
+        InstanceDetection det;
+        det.mask = components == k;
+        if (cv::countNonZero(det.mask) < false_positives_min_px) continue;
+        det.id = next++;
+        det.class_id = static_cast<ClassId>(c);
+        det.score = 1.f;
+        det.class_scores.assign(kNumClasses, 0.f);
+        det.class_scores[c] = 1.f;
+        det.box = cv::boundingRect(det.mask);
+        seg.instances.push_back(std::move(det));
+      }
+    }
+  }
   return seg;
 }
 
@@ -58,7 +85,8 @@ struct MapRunResult {
 /// Runs the object mapper over every `frame_step`-th frame with ground-truth poses; with
 /// `noise`, segmentation comes from apply_segmentation_noise (seed = frame index).
 inline MapRunResult run_object_mapper(const std::filesystem::path& dataset, const ObjectsConfig& config,
-                                      const std::optional<SegmentationNoiseParams>& noise, int frame_step) {
+                                      const std::optional<SegmentationNoiseParams>& noise, int frame_step,
+                                      const std::filesystem::path& write_to = {}) {
   const auto reader = open_dataset(dataset);
   ObjectMapper mapper(config, reader->camera());
   for (size_t i = 0; i < reader->size(); i += frame_step) {
@@ -66,13 +94,14 @@ inline MapRunResult run_object_mapper(const std::filesystem::path& dataset, cons
     SegmentationResult seg;
     if (noise) {
       const auto [labels, instances] = apply_segmentation_noise(frame.labels, frame.instances, i, *noise);
-      seg = segmentation_from_labels(labels, instances);
+      seg = segmentation_from_labels(labels, instances, 100);
     } else {
       seg = segmentation_from_labels(frame.labels, frame.instances);
     }
     mapper.process(frame, seg, *frame.gt_T_world_camera);
   }
   mapper.finish();
+  if (!write_to.empty()) mapper.write(write_to);
   return {mapper.to_json(), mapper.instances(), mapper.timings()};
 }
 
@@ -124,13 +153,19 @@ inline double weighted_overlap(const GtObjects& gt, const std::vector<ObjectInst
   double num = 0, den = 0;
   for (const auto& [inst, pts] : gt.points) {
     const auto g = voxelise(pts, voxel);
-    double best = 0;
+    double best = 0, best_precision = 0, best_recall = 0;
     for (const auto& s : pred) {
       size_t inter = 0;
       for (uint64_t k : g) inter += s.count(k);
       const double uni = static_cast<double>(g.size() + s.size() - inter);
-      if (uni > 0) best = std::max(best, inter / uni);
+      if (uni > 0 && inter / uni > best) {
+        best = inter / uni;
+        best_precision = static_cast<double>(inter) / s.size();
+        best_recall = static_cast<double>(inter) / g.size();
+      }
     }
+    if (std::getenv("SEMAP_OBJECTS_DEBUG"))
+      std::cout << "gt " << inst << " " << class_name(gt.classes.at(inst)) << " voxels " << g.size() << " IoU " << best << " precision " << best_precision << " recall " << best_recall << "\n";
     num += g.size() * best;
     den += g.size();
   }

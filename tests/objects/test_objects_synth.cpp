@@ -32,7 +32,7 @@ TEST(ObjectsSynth, GroundTruthMasksGiveExactCountsAndHighWov) {
   ObjectsConfig config;
   config.pixel_stride = 1;
   config.optimise_every = 20;
-  const auto run = test::run_object_mapper(dir.path() / "data", config, std::nullopt, 2);
+  const auto run = test::run_object_mapper(dir.path() / "data", config, std::nullopt, 2, dir.path() / "out");
   const auto t2 = std::chrono::steady_clock::now();
   const auto gt = test::load_gt_objects(dir.path() / "data");
   const double wov = test::weighted_overlap(gt, run.instances);
@@ -58,4 +58,19 @@ TEST(ObjectsSynth, GroundTruthMasksGiveExactCountsAndHighWov) {
   }
   EXPECT_EQ(test::counts_per_class(run.instances), test::counts_per_class(gt));
   EXPECT_GE(wov, 0.85);
+
+  // objects.json + objects/<id>.ply (SHARED_FORMATS.md).
+  std::ifstream in(dir.path() / "out" / "objects.json");
+  ASSERT_TRUE(in.good());
+  const auto doc = nlohmann::json::parse(in);
+  ASSERT_EQ(doc["objects"].size(), run.instances.size());
+  for (const auto& o : doc["objects"]) {
+    for (const char* key : {"id", "class", "class_id", "class_distribution", "n", "association_count", "centroid", "aabb",
+                            "obb", "point_count", "points_file", "first_seen", "last_seen", "state"})
+      EXPECT_TRUE(o.contains(key)) << key;
+    const auto cloud = read_ply(dir.path() / "out" / o["points_file"].get<std::string>());
+    EXPECT_EQ(cloud.vertices.size(), o["point_count"].get<size_t>());
+    EXPECT_EQ(o["obb"]["rotation"].size(), 9u);
+    EXPECT_NEAR(o["class_distribution"][o["class"].get<std::string>()].get<double>(), 1.0, 1e-6);
+  }
 }

@@ -1,0 +1,126 @@
+// Object map speed (issue 6): ms per keyframe for segmentation-to-segments (METHODS.md C2,
+// supervoxel-guided and mask back-projection) and for association + optimisation (C4-C5) on
+// a synthetic sequence, and association time against the number of map instances. Prints JSON.
+//   bench_objects [--frames N] [--step K] [--out DIR]
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
+#include <random>
+#include <string>
+
+#include "io/dataset.hpp"
+#include "objects/object_mapper.hpp"
+#include "synth/synth_config.hpp"
+
+using namespace semap;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+double ms(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
+
+SegmentationResult gt_segmentation(const Frame& frame) {
+  SegmentationResult seg;
+  double max_id = 0;
+  cv::minMaxLoc(frame.instances, nullptr, &max_id);
+  for (int inst = 1; inst <= static_cast<int>(max_id); ++inst) {
+    InstanceDetection det;
+    cv::compare(frame.instances, inst, det.mask, cv::CMP_EQ);
+    if (cv::countNonZero(det.mask) == 0) continue;
+    std::vector<int> votes(kNumClasses, 0);
+    for (int v = 0; v < frame.labels.rows; ++v)
+      for (int u = 0; u < frame.labels.cols; ++u)
+        if (det.mask.at<uint8_t>(v, u)) ++votes[frame.labels.at<uint8_t>(v, u)];
+    votes[0] = 0;
+    det.class_id = static_cast<ClassId>(std::max_element(votes.begin(), votes.end()) - votes.begin());
+    det.score = 1.f;
+    det.id = static_cast<uint16_t>(seg.instances.size() + 1);
+    seg.instances.push_back(std::move(det));
+  }
+  return seg;
+}
+
+ObjectSegment random_box_segment(std::mt19937& rng, const Eigen::Vector3f& centre, ClassId cls) {
+  std::uniform_real_distribution<float> u(-0.1f, 0.1f);
+  ObjectSegment s;
+  for (int i = 0; i < 1500; ++i) s.points.push_back(centre + Eigen::Vector3f(u(rng), u(rng), u(rng)));
+  s.colours.assign(s.points.size(), Rgb8{});
+  s.class_id = cls;
+  s.score = 1.f;
+  s.class_scores.assign(kNumClasses, 0.0);
+  s.class_scores[cls] = 1.0;
+  return s;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  int frames = 100, step = 2;
+  std::filesystem::path out = std::filesystem::temp_directory_path() / "semap_bench_objects";
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string key = argv[i];
+    if (key == "--frames") frames = std::atoi(argv[i + 1]);
+    else if (key == "--step") step = std::atoi(argv[i + 1]);
+    else if (key == "--out") out = argv[i + 1];
+  }
+  nlohmann::json report;
+  SynthConfig synth;
+  synth.frames = frames;
+  synth.seed = 1;
+  synth.objects = 10;
+  std::filesystem::remove_all(out);
+  generate_dataset(synth, out);
+  const auto reader = open_dataset(out);
+  std::vector<Frame> keyframes;
+  std::vector<SegmentationResult> segs;
+  for (size_t i = 0; i < reader->size(); i += step) {
+    keyframes.push_back(reader->load(i));
+    segs.push_back(gt_segmentation(keyframes.back()));
+  }
+  for (const std::string mode : {"supervoxel", "backprojection"}) {
+    ObjectsConfig config;
+    config.segmentation_mode = mode;
+    ObjectMapper mapper(config, reader->camera());
+    for (size_t k = 0; k < keyframes.size(); ++k) mapper.process(keyframes[k], segs[k], *keyframes[k].gt_T_world_camera);
+    mapper.finish();
+    const auto& t = mapper.timings();
+    report["per_keyframe"][mode] = {{"keyframes", t.frames},
+                                    {"image", std::to_string(synth.width) + "x" + std::to_string(synth.height)},
+                                    {"pixel_stride", config.pixel_stride},
+                                    {"segmentation_ms", t.segmentation_ms / t.frames},
+                                    {"association_optimisation_ms", t.association_ms / t.frames},
+                                    {"instances", mapper.instances().size()}};
+  }
+  // Association time vs number of instances: N boxes on a grid, one frame of 10 segments.
+  std::mt19937 rng(7);
+  for (int n : {10, 50, 100, 200, 500, 1000}) {
+    ObjectsConfig config;
+    ObjectMap map(config);
+    const int side = static_cast<int>(std::ceil(std::sqrt(n)));
+    std::vector<ObjectSegment> seed_segments;
+    for (int i = 0; i < n; ++i)
+      seed_segments.push_back(random_box_segment(rng, Eigen::Vector3f(0.5f * (i % side), 0.5f * (i / side), 0), id(Label::kCup)));
+    map.associate(seed_segments, 0, 1);
+    std::vector<ObjectSegment> frame;
+    for (int i = 0; i < 10; ++i) {
+      const int target = (i * 97) % n;
+      frame.push_back(random_box_segment(rng, Eigen::Vector3f(0.5f * (target % side), 0.5f * (target / side), 0) +
+                                                  Eigen::Vector3f(0.01f, 0, 0),
+                                         id(Label::kCup)));
+    }
+    const int repeats = 5;
+    const auto t0 = Clock::now();
+    for (int r = 0; r < repeats; ++r) map.associate(frame, 1 + r, 2 + r);
+    const auto t1 = Clock::now();
+    map.optimise(10, false);
+    const auto t2 = Clock::now();
+    report["association_vs_instances"].push_back({{"instances", n},
+                                                  {"segments_per_frame", frame.size()},
+                                                  {"association_ms_per_frame", ms(t0, t1) / repeats},
+                                                  {"optimisation_ms", ms(t1, t2)}});
+  }
+  std::filesystem::remove_all(out);
+  std::cout << report.dump(2) << std::endl;
+  return 0;
+}
