@@ -54,8 +54,9 @@ void add_synth_command(CLI::App& app, CommandRunner& run) {
       const SynthStats stats = generate_dataset(config, opt->out);
       std::printf("semap synth: %d frames, %zu objects, %zu gt points -> %s\n", config.frames, stats.objects,
                   stats.gt_points, opt->out.c_str());
-      std::printf("renderer: %.1f frames/s at %dx%d (ray casting only); %.1f frames/s overall incl. noise + PNG writing\n",
-                  stats.render_fps, config.width, config.height, stats.total_fps);
+      std::printf("renderer: %.1f frames/s at %dx%d (ray casting only, wall clock; %.1f ms CPU per frame); "
+                  "%.1f frames/s overall incl. noise + PNG writing\n",
+                  stats.render_fps, config.width, config.height, 1000.0 * stats.render_cpu_s_per_frame, stats.total_fps);
       return 0;
     };
   });

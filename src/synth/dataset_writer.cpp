@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -139,13 +140,15 @@ SynthStats generate_dataset(const SynthConfig& cfg, const fs::path& out_dir) {
     std::string instance_noisy_list = "# noisy instance ids\n# timestamp filename\n";
 
     Progress progress("synth", static_cast<size_t>(cfg.frames));
-    double render_s = 0;
+    double render_s = 0, render_cpu_s = 0;
     const auto start = Clock::now();
     for (int i = 0; i < cfg.frames; ++i) {
       const Pose& pose = traj[i].T_world_camera;
       const auto t0 = Clock::now();
+      const std::clock_t c0 = std::clock();
       const RenderedFrame frame = render(scene, pose, K);
       render_s += seconds_since(t0);
+      render_cpu_s += static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
       mark_observed_points(samples, frame.depth, pose, K, cfg.gt_visibility_tolerance, observed);
       const uint64_t frame_seed = synth_detail::hash_combine(cfg.seed, static_cast<uint64_t>(i));
       const std::string name = frame_name(i);
@@ -197,6 +200,7 @@ SynthStats generate_dataset(const SynthConfig& cfg, const fs::path& out_dir) {
 
     SynthStats stats;
     stats.render_fps = cfg.frames / std::max(render_s, 1e-9);
+    stats.render_cpu_s_per_frame = render_cpu_s / cfg.frames;
     stats.total_fps = cfg.frames / std::max(loop_s, 1e-9);
     stats.gt_points = kept.size();
     stats.objects = scene.objects.size();

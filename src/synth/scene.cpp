@@ -515,8 +515,13 @@ SyntheticScene make_scene(uint64_t seed, int n_objects, const Vector3d& room_siz
           }
         if (!support) placement = Placement::kWall;
       }
-      if (placement == Placement::kBesidePrevious && (placed.empty() || placed.back().wall < 0))
-        placement = Placement::kWall;
+      // "Beside" = touching the latest wall-placed object of the same class (chair by chair).
+      const Placed* neighbour = nullptr;
+      if (placement == Placement::kBesidePrevious) {
+        for (auto it = placed.rbegin(); it != placed.rend() && !neighbour; ++it)
+          if (it->tmpl.class_id == slot.class_id && it->wall >= 0) neighbour = &*it;
+        if (!neighbour) placement = Placement::kWall;
+      }
 
       bool done = false;
       Placed result{t, Matrix3d::Identity(), Vector3d::Zero(), {}, -1, placement};
@@ -536,7 +541,7 @@ SyntheticScene make_scene(uint64_t seed, int n_objects, const Vector3d& room_siz
           if (t.hi.y() - t.lo.y() + 0.08 > max_depth_from_wall) continue;
         } else if (placement == Placement::kBesidePrevious) {
           // Touching the previous object side by side: same wall and yaw, OBBs share a face.
-          const Placed& prev = placed.back();
+          const Placed& prev = *neighbour;
           wall = prev.wall;
           R = prev.rotation;
           const int side = (attempt % 2 == 0) ? 1 : -1;
@@ -549,7 +554,7 @@ SyntheticScene make_scene(uint64_t seed, int n_objects, const Vector3d& room_siz
           c += back_dir * (prev_back - (t.hi.y() - t.lo.y()) / 2);
           c.z() = 0;
           origin = c - R * Vector3d((t.hi.x() + t.lo.x()) / 2, (t.hi.y() + t.lo.y()) / 2, 0);
-          if (attempt >= 2) placement = Placement::kWall;  // no room beside it: fall back
+          if (attempt >= 2) break;  // no room on either side: re-draw the whole layout
         } else {
           // On top of the support, fully inside its top face (monitor at the back).
           const Obb& top = support->obb;

@@ -33,7 +33,8 @@ struct SynthConfig {
 /// temporary sibling folder renamed at the end, so an interrupted run never looks complete.
 /// Returns the measured renderer rate (frames/s, rendering only) and prints a progress line.
 struct SynthStats {
-  double render_fps = 0;     ///< frames per second of the ray caster alone
+  double render_fps = 0;     ///< frames per second of the ray caster alone (wall clock)
+  double render_cpu_s_per_frame = 0;  ///< process CPU time of the ray caster per frame (all threads)
   double total_fps = 0;      ///< frames per second including noise and PNG writing
   size_t gt_points = 0;      ///< points kept in gt_points.ply
   size_t objects = 0;

@@ -14,7 +14,7 @@ struct LoopTrajectoryParams {
   double height_amplitude = 0.1;
   double wall_clearance_x = 1.8;  ///< m from the ellipse to the +-x walls
   double wall_clearance_y = 1.7;  ///< m from the ellipse to the +-y walls
-  double pitch_deg = -18.0;    ///< mean pitch (negative = looking down)
+  double pitch_deg = -25.0;    ///< mean pitch (negative = looking down)
   double pitch_amplitude_deg = 6.0;
   double yaw_amplitude_deg = 14.0;
   double roll_amplitude_deg = 2.0;
