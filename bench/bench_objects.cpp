@@ -3,6 +3,7 @@
 // a synthetic sequence, and association time against the number of map instances. Prints JSON.
 //   bench_objects [--frames N] [--step K] [--out DIR]
 #include <chrono>
+#include <ctime>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
@@ -82,15 +83,22 @@ int main(int argc, char** argv) {
     ObjectsConfig config;
     config.segmentation_mode = mode;
     ObjectMapper mapper(config, reader->camera());
+    const std::clock_t cpu0 = std::clock();
     for (size_t k = 0; k < keyframes.size(); ++k) mapper.process(keyframes[k], segs[k], *keyframes[k].gt_T_world_camera);
     mapper.finish();
+    const double cpu_ms_per_keyframe = 1000.0 * (std::clock() - cpu0) / CLOCKS_PER_SEC / keyframes.size();
     const auto& t = mapper.timings();
     report["per_keyframe"][mode] = {{"keyframes", t.frames},
                                     {"image", std::to_string(synth.width) + "x" + std::to_string(synth.height)},
                                     {"pixel_stride", config.pixel_stride},
                                     {"segmentation_ms", t.segmentation_ms / t.frames},
                                     {"association_optimisation_ms", t.association_ms / t.frames},
+                                    {"process_cpu_ms_total_per_keyframe", cpu_ms_per_keyframe},
                                     {"instances", mapper.instances().size()}};
+  }
+  {
+    double load[1] = {0};
+    if (getloadavg(load, 1) == 1) report["load_average_1min"] = load[0];
   }
   // Association time vs number of instances: N boxes on a grid, one frame of 10 segments.
   std::mt19937 rng(7);
