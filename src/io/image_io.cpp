@@ -52,6 +52,7 @@ void check_container(const std::filesystem::path& path, const std::string& bytes
 cv::Mat decode(const std::filesystem::path& path) {
   const std::string bytes = io_detail::read_file_bytes(path);
   if (bytes.empty()) throw Error(path, "empty image file");
+  if (bytes.size() > (size_t{1} << 30)) throw Error(path, "image file larger than 1 GiB");
   check_container(path, bytes);
   cv::Mat image;
   try {
