@@ -1,0 +1,208 @@
+// Tracking benchmark (issue 4): our tracker vs Open3D RGB-D odometry (hybrid term, frame to
+// frame) on the same frames in one run, plus the effect of depth repair (A1) on ATE.
+// Prints one JSON object. Usage:
+//   bench_tracking [DATASET_DIR] [--frames N] [--no-open3d] [--no-repair-compare]
+//                  [--no-loop-compare] [--deterministic] [--out-trajectory FILE]
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
+#include <string>
+#include <vector>
+
+#include "core/error.hpp"
+#include "eval/trajectory_metrics.hpp"
+#include "io/dataset.hpp"
+#include "io/trajectory_io.hpp"
+#include "tracking/tracker.hpp"
+
+#ifdef SEMAP_HAVE_OPEN3D
+#include <open3d/camera/PinholeCameraIntrinsic.h>
+#include <open3d/geometry/Image.h>
+#include <open3d/geometry/RGBDImage.h>
+#include <open3d/pipelines/odometry/Odometry.h>
+#endif
+
+using namespace semap;
+using json = nlohmann::json;
+
+namespace {
+bool verbose = false;
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+json evaluate(const Trajectory& gt, const Trajectory& est) {
+  json j;
+  const AteResult ate = compute_ate(gt, est);
+  const RpeResult rpe = compute_rpe(gt, est);
+  j["ate_rmse_m"] = ate.rmse;
+  j["ate_matched"] = ate.matched;
+  j["rpe_trans_rmse_m_per_s"] = rpe.trans_rmse_m_per_s;
+  j["rpe_rot_rmse_deg_per_s"] = rpe.rot_rmse_deg_per_s;
+  return j;
+}
+
+json run_ours(const std::vector<Frame>& frames, const CameraModel& camera, const TrackingConfig& config,
+              const Trajectory& gt, Trajectory* out_traj) {
+  Tracker tracker(config, camera);
+  std::vector<double> ms;
+  size_t lost = 0, reloc = 0, prior = 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (const auto& f : frames) {
+    const TrackResult r = tracker.track(f);
+    if (verbose)
+      std::fprintf(stderr, "frame %zu %s kf=%d ref=%d matches=%d inliers=%d prior=%d icp_rmse=%.4f overlap=%.3f ms=%.1f (repair %.1f feat %.1f ransac %.1f icp %.1f kf %.1f)\n",
+                   f.index, to_string(r.status), int(r.is_keyframe), r.reference_keyframe, r.feature_matches,
+                   r.ransac_inliers, int(r.used_motion_prior), r.icp_rmse, r.icp_overlap, r.timings.total_ms,
+                   r.timings.repair_ms, r.timings.features_ms, r.timings.ransac_ms, r.timings.icp_ms, r.timings.keyframe_ms);
+    ms.push_back(r.timings.total_ms);
+    lost += r.status == TrackingStatus::lost;
+    reloc += r.status == TrackingStatus::relocalised;
+    prior += r.used_motion_prior;
+  }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const Trajectory odometry_view = tracker.trajectory();  // before the final optimisation
+  const Trajectory traj = tracker.finish();
+  const TrackerStats s = tracker.stats();
+  json j = evaluate(gt, traj);
+  j["ate_before_final_optimisation_m"] = compute_ate(gt, odometry_view).rmse;
+  j["median_frame_ms"] = median(ms);
+  j["fps_median"] = 1000.0 / std::max(1e-9, median(ms));
+  j["fps_wall"] = frames.size() / wall;
+  j["max_frame_ms"] = *std::max_element(ms.begin(), ms.end());
+  j["keyframes"] = s.keyframes;
+  j["keyframe_reuses"] = s.keyframe_reuses;
+  j["loop_edges"] = s.loop_edges;
+  j["optimisations"] = s.optimisations;
+  j["lost_frames"] = lost;
+  j["relocalised_frames"] = reloc;
+  j["motion_prior_frames"] = prior;
+  if (out_traj) *out_traj = traj;
+  return j;
+}
+
+#ifdef SEMAP_HAVE_OPEN3D
+json run_open3d(const std::vector<Frame>& frames, const CameraModel& camera, const Trajectory& gt) {
+  namespace o3 = open3d;
+  const auto& k = camera.depth;
+  o3::camera::PinholeCameraIntrinsic intrinsic(k.width, k.height, k.fx, k.fy, k.cx, k.cy);
+  auto to_rgbd = [](const Frame& f) {
+    cv::Mat gray, grayf;
+    cv::cvtColor(f.rgb, gray, cv::COLOR_BGR2GRAY);
+    if (gray.size() != f.depth.size()) cv::resize(gray, gray, f.depth.size());
+    gray.convertTo(grayf, CV_32F, 1.0 / 255.0);
+    o3::geometry::Image intensity, depth;
+    intensity.Prepare(grayf.cols, grayf.rows, 1, 4);
+    depth.Prepare(f.depth.cols, f.depth.rows, 1, 4);
+    std::memcpy(intensity.data_.data(), grayf.data, intensity.data_.size());
+    cv::Mat d = f.depth.isContinuous() ? f.depth : f.depth.clone();
+    std::memcpy(depth.data_.data(), d.data, depth.data_.size());
+    return o3::geometry::RGBDImage(intensity, depth);
+  };
+  Trajectory traj;
+  std::vector<double> ms;
+  Pose pose = Pose::Identity();
+  Eigen::Matrix4d last_motion = Eigen::Matrix4d::Identity();
+  o3::geometry::RGBDImage previous;
+  size_t failures = 0;
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    o3::geometry::RGBDImage current = to_rgbd(frames[i]);
+    if (i > 0) {
+      o3::pipelines::odometry::OdometryOption option({20, 10, 5}, 0.07, 0.0, 4.0);
+      const auto [ok, t_prev_cur, info] = o3::pipelines::odometry::ComputeRGBDOdometry(
+          current, previous, intrinsic, last_motion,
+          o3::pipelines::odometry::RGBDOdometryJacobianFromHybridTerm(), option);
+      if (ok) {
+        last_motion = t_prev_cur;
+        Pose step;
+        step.matrix() = t_prev_cur;
+        pose = orthonormalized(pose * step);
+      } else {
+        ++failures;
+      }
+    }
+    previous = std::move(current);
+    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    traj.push_back({frames[i].timestamp, pose});
+  }
+  json j = evaluate(gt, traj);
+  j["median_frame_ms"] = median(ms);
+  j["fps_median"] = 1000.0 / std::max(1e-9, median(ms));
+  j["failures"] = failures;
+  return j;
+}
+#endif
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    std::string dataset = std::string(SEMAP_SHARED_DIR) + "/data/tum_fr1_rpy";
+    size_t max_frames = 0;
+    bool open3d = true, repair_compare = true, loop_compare = true, deterministic = false;
+    std::string out_trajectory;
+    for (int i = 1; i < argc; ++i) {
+      const std::string a = argv[i];
+      if (a == "--frames" && i + 1 < argc) max_frames = std::stoul(argv[++i]);
+      else if (a == "--no-open3d") open3d = false;
+      else if (a == "--no-repair-compare") repair_compare = false;
+      else if (a == "--no-loop-compare") loop_compare = false;
+      else if (a == "--deterministic") deterministic = true;
+      else if (a == "--verbose") verbose = true;
+      else if (a == "--out-trajectory" && i + 1 < argc) out_trajectory = argv[++i];
+      else if (!a.empty() && a[0] != '-') dataset = a;
+      else throw Error(a, "unknown argument");
+    }
+    auto reader = open_dataset(dataset);
+    const size_t n = max_frames ? std::min(max_frames, reader->size()) : reader->size();
+    std::vector<Frame> frames;
+    frames.reserve(n);
+    for (size_t i = 0; i < n; ++i) frames.push_back(reader->load(i));
+    Trajectory gt;
+    for (const auto& f : frames)
+      if (f.gt_T_world_camera) gt.push_back({f.timestamp, *f.gt_T_world_camera});
+    if (gt.size() < 3) gt = reader->ground_truth();
+
+    json report;
+    report["dataset"] = dataset;
+    report["frames"] = n;
+    report["threads_hint"] = "run under the project's 2-core budget";
+    TrackingConfig config;
+    config.background_loop_closure = !deterministic;
+    Trajectory traj;
+    report["ours"] = run_ours(frames, reader->camera(), config, gt, &traj);
+    if (!out_trajectory.empty()) write_tum_trajectory(out_trajectory, traj);
+    if (repair_compare) {
+      TrackingConfig no_repair = config;
+      no_repair.depth_repair = false;
+      report["ours_without_depth_repair"] = run_ours(frames, reader->camera(), no_repair, gt, nullptr);
+    }
+    if (loop_compare) {
+      TrackingConfig odometry_only = config;
+      odometry_only.pose_graph = false;
+      odometry_only.keyframe_reuse = false;
+      report["ours_odometry_only"] = run_ours(frames, reader->camera(), odometry_only, gt, nullptr);
+    }
+#ifdef SEMAP_HAVE_OPEN3D
+    if (open3d) {
+      report["open3d_hybrid_frame_to_frame"] = run_open3d(frames, reader->camera(), gt);
+      report["ours_ate_lower_than_open3d"] =
+          report["ours"]["ate_rmse_m"].get<double>() < report["open3d_hybrid_frame_to_frame"]["ate_rmse_m"].get<double>();
+    }
+#else
+    (void)open3d;
+    report["open3d_hybrid_frame_to_frame"] = "Open3D not found at build time";
+#endif
+    std::cout << report.dump(2) << std::endl;
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_tracking: %s\n", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,19 @@
+#pragma once
+// Joint median filter depth repair (METHODS.md A1).
+#include <opencv2/core.hpp>
+
+namespace semap {
+
+struct DepthRepairParams {
+  int radius = 3;                ///< window radius r, pixels
+  double gray_threshold = 12.0;  ///< t_gray, grey levels
+  int min_support = 1;           ///< fewer same-grey valid neighbours -> stays invalid
+};
+
+/// Fills every invalid (0 / non-finite) pixel of `depth` (CV_32FC1, metres) with the median of
+/// the valid depths in its (2r+1)^2 window whose grey value (from `rgb`, CV_8UC3 BGR or CV_8UC1,
+/// same size) is within t_gray of the centre's. Valid pixels are never changed. Row-parallel.
+/// Throws semap::Error on type/size mismatch.
+cv::Mat repair_depth(const cv::Mat& depth, const cv::Mat& rgb, const DepthRepairParams& params);
+
+}  // namespace semap

@@ -1,0 +1,92 @@
+#pragma once
+// Registration building blocks of the odometry (METHODS.md A2): closed-form rigid fit
+// (Kabsch/Umeyama), voting RANSAC over 3D-3D matches, ORB features with 3D points, and
+// coarse-to-fine point-to-plane ICP with projective data association.
+#include <Eigen/Core>
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <opencv2/features2d.hpp>
+#include <vector>
+
+#include "core/camera.hpp"
+#include "core/pose.hpp"
+
+namespace semap {
+
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+
+/// Least-squares rigid transform T with dst_i ~ T * src_i (Kabsch/Umeyama, no scale).
+/// Needs >= 3 non-collinear pairs; returns identity (and ok=false) otherwise.
+Pose fit_rigid(const std::vector<Eigen::Vector3d>& src, const std::vector<Eigen::Vector3d>& dst, bool* ok = nullptr);
+
+struct RansacParams {
+  int iterations = 200;
+  double inlier_distance = 0.04;  ///< metres
+  int min_inliers = 15;
+  uint32_t seed = 1;
+};
+struct RansacResult {
+  bool ok = false;                 ///< >= min_inliers after the refit
+  Pose T = Pose::Identity();       ///< dst ~ T * src
+  std::vector<int> inliers;        ///< indices into the pairs
+  double inlier_rmse = 0.0;        ///< metres
+};
+/// Voting RANSAC (METHODS.md A2 step 3): 3-pair samples, Kabsch, inlier votes under a distance
+/// threshold, best hypothesis refit on all its inliers (twice). Deterministic for a seed.
+RansacResult ransac_rigid(const std::vector<Eigen::Vector3d>& src, const std::vector<Eigen::Vector3d>& dst,
+                          const RansacParams& params);
+
+/// ORB keypoints of one image with their back-projected 3D points (camera frame).
+struct FrameFeatures {
+  std::vector<cv::KeyPoint> keypoints;  ///< only keypoints with valid depth are kept
+  cv::Mat descriptors;                  ///< CV_8U, one row per keypoint
+  std::vector<Eigen::Vector3d> points;  ///< camera-frame points, metres
+};
+/// ORB on `gray` (CV_8UC1); keeps keypoints whose depth (CV_32FC1, metres) is in range.
+FrameFeatures extract_features(cv::ORB& orb, const cv::Mat& gray, const cv::Mat& depth,
+                               const PinholeIntrinsics& intrinsics, double min_depth, double max_depth);
+/// Brute-force Hamming matching query->train with ratio test and a mutual (cross) check.
+/// Returns (query index, train index) pairs.
+std::vector<std::pair<int, int>> match_features(const FrameFeatures& query, const FrameFeatures& train,
+                                                double ratio, int max_hamming);
+
+/// One level of an RGB-D pyramid: vertex and normal maps in the camera frame.
+struct DepthLevel {
+  PinholeIntrinsics intrinsics;
+  cv::Mat vertices;  ///< CV_32FC3, NaN where invalid
+  cv::Mat normals;   ///< CV_32FC3, NaN where invalid (only computed when requested)
+};
+/// Coarse-to-fine depth pyramid (level 0 = input). Depth outside [min, max] is invalid;
+/// downsampling averages the valid pixels of each 2x2 block that agree with its first valid one.
+std::vector<DepthLevel> build_depth_pyramid(const cv::Mat& depth, const PinholeIntrinsics& intrinsics, int levels,
+                                            double min_depth, double max_depth, bool with_normals);
+
+struct IcpParams {
+  std::vector<int> iterations = {4, 6, 10};  ///< per level, level 0 first
+  int stride = 2;                  ///< source pixel step at level 0 (1 at coarser levels)
+  double max_distance = 0.10;      ///< metres at level 0, doubled per level up
+  double max_normal_angle_deg = 35.0;
+  double huber_delta = 0.01;       ///< metres
+  double convergence_update = 1e-5;
+  double converged_update = 2e-3;  ///< last update above this = not converged
+};
+struct IcpResult {
+  bool converged = false;
+  Pose T_target_source = Pose::Identity();
+  double rmse = 0.0;               ///< point-to-plane RMSE of the matched points at level 0, metres
+  int matched = 0;                 ///< correspondences at level 0
+  double overlap = 0.0;            ///< matched / valid source points at level 0
+  Matrix6d hessian = Matrix6d::Zero();  ///< J^T J at the result, order (rotation, translation), left perturbation in the target frame
+  int iterations_run = 0;
+};
+/// Point-to-plane ICP (METHODS.md A2 step 4): source vertices are transformed by the current
+/// estimate, projected into the target image (projective association), matched to the target
+/// vertex/normal there; Gauss-Newton with Huber weights, coarse to fine. Row-parallel.
+IcpResult icp_point_to_plane(const std::vector<DepthLevel>& source, const std::vector<DepthLevel>& target,
+                             const Pose& initial_T_target_source, const IcpParams& params);
+
+/// exp of a twist (rotation first, translation second) as an isometry (first-order SE(3)).
+Pose twist_exp(const Vector6d& xi);
+
+}  // namespace semap

@@ -1,0 +1,628 @@
+#include "tracking/tracker.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <deque>
+#include <map>
+#include <mutex>
+#include <numeric>
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <thread>
+#include <cstdio>
+#include <cstdlib>
+
+#include "core/error.hpp"
+#include "tracking/depth_repair.hpp"
+#include "tracking/ferns.hpp"
+#include "tracking/pose_graph.hpp"
+#include "tracking/registration.hpp"
+
+namespace semap {
+
+const char* to_string(TrackingStatus status) {
+  switch (status) {
+    case TrackingStatus::ok: return "ok";
+    case TrackingStatus::lost: return "lost";
+    case TrackingStatus::relocalised: return "relocalised";
+  }
+  return "?";
+}
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+double deg(double rad) { return rad * 180.0 / M_PI; }
+
+struct Keyframe {
+  int id = 0;
+  size_t frame_index = 0;
+  double timestamp = 0.0;
+  cv::Mat depth;           ///< repaired depth, metres (pyramids are rebuilt from it on demand)
+  FrameFeatures features;
+  FernCode code;
+  int parent = -1;         ///< keyframe it was tracked from
+  Pose T_parent_this = Pose::Identity();
+};
+
+struct FrameRecord {
+  size_t frame_index = 0;
+  double timestamp = 0.0;
+  int reference = 0;
+  Pose T_ref_frame = Pose::Identity();
+};
+
+/// Outcome of registering a frame against a keyframe (A2).
+struct Registration {
+  bool ok = false;
+  Pose T_kf_frame = Pose::Identity();
+  int matches = 0, inliers = 0;
+  bool used_prior = false;
+  IcpResult icp;
+  double ransac_ms = 0, icp_ms = 0;
+};
+}  // namespace
+
+struct Tracker::Impl {
+  TrackingConfig cfg;
+  CameraModel camera;
+  PinholeIntrinsics intr;
+  cv::Ptr<cv::ORB> orb;
+  IcpParams icp_params;
+
+  // Shared with the loop-closure worker (guarded by mutex).
+  mutable std::mutex mutex;
+  std::vector<std::shared_ptr<const Keyframe>> keyframes;
+  std::map<int, Pose> kf_pose;  ///< T_world_kf, latest estimate
+  PoseGraph graph;
+  FernDatabase ferns;
+  TrackerStats stats;
+  uint64_t pose_version = 0;  ///< bumped whenever keyframe poses are corrected
+
+  // Worker.
+  std::thread worker;
+  std::condition_variable cv;
+  std::deque<int> queue;
+  bool stop = false;
+  bool busy = false;
+
+  // Per-frame state (main thread only).
+  std::vector<FrameRecord> frames;
+  int reference = -1;
+  std::vector<DepthLevel> ref_pyramid;
+  Pose T_ref_last = Pose::Identity();
+  Pose velocity = Pose::Identity();  ///< T_{k-2}^{-1} T_{k-1}
+  bool velocity_valid = false;
+  uint64_t seen_version = 0;
+  bool lost = false;
+
+  Impl(const TrackingConfig& c, const CameraModel& cam)
+      : cfg(c), camera(cam), intr(cam.depth), ferns(make_fern_params(c)) {
+    cfg.validate();
+    orb = cv::ORB::create(cfg.orb_features, float(cfg.orb_scale_factor), cfg.orb_levels, 19, 0, 2,
+                          cv::ORB::HARRIS_SCORE, 31, cfg.orb_fast_threshold);
+    icp_params.iterations = {cfg.icp_iterations_fine, cfg.icp_iterations_mid};
+    for (int l = 2; l < cfg.icp_levels; ++l) icp_params.iterations.push_back(cfg.icp_iterations_coarse);
+    icp_params.iterations.resize(cfg.icp_levels);
+    icp_params.stride = cfg.icp_stride;
+    icp_params.max_distance = cfg.icp_max_distance;
+    icp_params.max_normal_angle_deg = cfg.icp_max_normal_angle_deg;
+    icp_params.huber_delta = cfg.icp_huber_delta;
+    icp_params.convergence_update = cfg.icp_convergence_update;
+    icp_params.converged_update = cfg.icp_converged_update;
+    if (cfg.background_loop_closure) worker = std::thread([this] { worker_loop(); });
+  }
+
+  ~Impl() { stop_worker(); }
+
+  static FernParams make_fern_params(const TrackingConfig& c) {
+    FernParams p;
+    p.fern_count = c.fern_count;
+    p.fern_tests = c.fern_tests;
+    p.width = c.fern_width;
+    p.height = c.fern_height;
+    p.min_depth = c.min_depth;
+    p.max_depth = c.max_depth;
+    p.seed = uint32_t(c.seed);
+    return p;
+  }
+
+  void stop_worker() {
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      stop = true;
+    }
+    cv.notify_all();
+    if (worker.joinable()) worker.join();
+  }
+
+  std::vector<DepthLevel> pyramid(const cv::Mat& depth) const {
+    return build_depth_pyramid(depth, intr, cfg.icp_levels, cfg.min_depth, cfg.max_depth, true);
+  }
+
+  bool icp_acceptable(const IcpResult& icp, double max_rmse, double min_overlap) const {
+    return icp.converged && icp.rmse <= max_rmse && icp.overlap >= min_overlap;
+  }
+
+  /// A2: features -> voting RANSAC -> ICP (from RANSAC, else from the prior).
+  Registration register_to(const FrameFeatures& frame_features, const std::vector<DepthLevel>& frame_pyramid,
+                           const FrameFeatures& kf_features, const std::vector<DepthLevel>& kf_pyramid,
+                           const Pose* prior, uint32_t seed) const {
+    Registration reg;
+    auto t0 = Clock::now();
+    const auto pairs = match_features(frame_features, kf_features, cfg.match_ratio, cfg.match_max_hamming);
+    reg.matches = int(pairs.size());
+    std::vector<Eigen::Vector3d> src, dst;
+    for (const auto& [q, t] : pairs) {
+      src.push_back(frame_features.points[q]);
+      dst.push_back(kf_features.points[t]);
+    }
+    RansacParams rp;
+    rp.iterations = cfg.ransac_iterations;
+    rp.inlier_distance = cfg.ransac_inlier_distance;
+    rp.min_inliers = cfg.ransac_min_inliers;
+    rp.seed = seed;
+    const RansacResult ransac = ransac_rigid(src, dst, rp);
+    reg.inliers = ransac.ok ? int(ransac.inliers.size()) : 0;
+    reg.ransac_ms = ms_since(t0);
+    t0 = Clock::now();
+    if (!ransac.ok && !prior) {
+      reg.icp_ms = ms_since(t0);
+      return reg;
+    }
+    Pose start = ransac.ok ? ransac.T : *prior;
+    reg.used_prior = !ransac.ok;
+    reg.icp = icp_point_to_plane(frame_pyramid, kf_pyramid, start, icp_params);
+    // RANSAC on a few bad matches can mislead ICP; the prior is the second chance.
+    if (ransac.ok && prior && !icp_acceptable(reg.icp, cfg.loss_max_icp_rmse, cfg.loss_min_overlap)) {
+      IcpResult second = icp_point_to_plane(frame_pyramid, kf_pyramid, *prior, icp_params);
+      if (icp_acceptable(second, cfg.loss_max_icp_rmse, cfg.loss_min_overlap)) {
+        reg.icp = second;
+        reg.used_prior = true;
+      }
+    }
+    reg.T_kf_frame = reg.icp.T_target_source;
+    reg.ok = icp_acceptable(reg.icp, cfg.loss_max_icp_rmse, cfg.loss_min_overlap);
+    reg.icp_ms = ms_since(t0);
+    return reg;
+  }
+
+  Matrix6d edge_information(const IcpResult& icp) const {
+    return information_from_icp(icp.hessian, icp.T_target_source, icp.matched,
+                                std::max(icp.rmse, cfg.information_min_sigma), cfg.information_effective_points);
+  }
+
+  Pose world_pose_locked(int kf) const { return kf_pose.at(kf); }
+
+  // --- loop closure (A3 + A4), on the worker or inline ---
+  void worker_loop() {
+    std::unique_lock<std::mutex> lock(mutex);
+    while (true) {
+      cv.wait(lock, [&] { return stop || !queue.empty(); });
+      if (queue.empty()) {
+        if (stop) return;
+        continue;
+      }
+      const int id = queue.front();
+      queue.pop_front();
+      busy = true;
+      lock.unlock();
+      process_keyframe(id);
+      lock.lock();
+      busy = false;
+      cv.notify_all();
+    }
+  }
+
+  void wait_idle() {
+    std::unique_lock<std::mutex> lock(mutex);
+    cv.wait(lock, [&] { return queue.empty() && !busy; });
+  }
+
+  void submit_keyframe(int id) {
+    if (!cfg.pose_graph) return;
+    if (cfg.background_loop_closure) {
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        queue.push_back(id);
+      }
+      cv.notify_all();
+    } else {
+      process_keyframe(id);
+    }
+  }
+
+  /// Looks for a loop from keyframe `id` to older keyframes through the ferns, verifies it
+  /// geometrically (A2) and optimises the pose graph when one is found.
+  void process_keyframe(int id) {
+    std::shared_ptr<const Keyframe> kf;
+    std::vector<std::pair<double, std::shared_ptr<const Keyframe>>> candidates;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      kf = keyframes[id];
+      const auto sims = ferns.similarities(kf->code);
+      const auto& ids = ferns.ids();
+      for (size_t i = 0; i < ids.size(); ++i) {
+        const int other = ids[i];
+        if (id - other < cfg.loop_min_keyframe_gap || sims[i] < cfg.loop_min_similarity) continue;
+        candidates.emplace_back(sims[i], keyframes[other]);
+      }
+    }
+    std::stable_sort(candidates.begin(), candidates.end(),
+                     [](const auto& a, const auto& b) { return a.first > b.first; });
+    if (int(candidates.size()) > cfg.loop_candidates) candidates.resize(cfg.loop_candidates);
+    if (candidates.empty()) return;
+    const auto kf_pyramid = pyramid(kf->depth);
+    bool added = false;
+    for (const auto& [sim, other] : candidates) {
+      const auto other_pyramid = pyramid(other->depth);
+      Registration reg = register_to(kf->features, kf_pyramid, other->features, other_pyramid, nullptr,
+                                     uint32_t(cfg.seed) + uint32_t(id) * 7919u);
+      if (!reg.ok || reg.icp.rmse > cfg.loop_max_icp_rmse || reg.icp.overlap < cfg.loop_min_overlap) continue;
+      std::lock_guard<std::mutex> lock(mutex);
+      const Pose current = kf_pose.at(other->id).inverse() * kf_pose.at(id);
+      if ((current.translation() - reg.T_kf_frame.translation()).norm() > cfg.loop_max_pose_disagreement) continue;
+      PoseGraphEdge edge;
+      edge.from = other->id;
+      edge.to = id;
+      edge.T_from_to = reg.T_kf_frame;
+      edge.information = edge_information(reg.icp);
+      edge.is_loop = true;
+      graph.add_edge(edge);
+      ++stats.loop_edges;
+      added = true;
+    }
+    if (added) optimise();
+  }
+
+  /// Optimises a snapshot of the graph without holding the lock, then applies the result;
+  /// keyframes added meanwhile follow their parent's correction.
+  void optimise() {
+    PoseGraph snapshot;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      for (const auto& [id, pose] : kf_pose) snapshot.add_vertex(id, pose);
+      for (const auto& e : graph.edges()) snapshot.add_edge(e);
+    }
+    if (!snapshot.optimize(cfg.pose_graph_iterations, cfg.pose_graph_loop_huber)) return;
+    std::lock_guard<std::mutex> lock(mutex);
+    for (const auto& [id, pose] : snapshot.vertices()) kf_pose[id] = pose;
+    for (const auto& kf : keyframes)
+      if (!snapshot.has_vertex(kf->id) && kf->parent >= 0) kf_pose[kf->id] = kf_pose.at(kf->parent) * kf->T_parent_this;
+    ++stats.optimisations;
+    ++pose_version;
+  }
+
+  // --- per-frame path ---
+  TrackResult track(const Frame& frame) {
+    const auto t_start = Clock::now();
+    if (frame.depth.empty() || frame.depth.type() != CV_32FC1)
+      throw Error(frame.depth_path.empty() ? "Tracker::track" : frame.depth_path, "depth must be CV_32FC1 metres");
+    if (frame.rgb.empty() || frame.rgb.type() != CV_8UC3)
+      throw Error(frame.rgb_path.empty() ? "Tracker::track" : frame.rgb_path, "rgb must be CV_8UC3");
+    if (frame.depth.cols != intr.width || frame.depth.rows != intr.height)
+      throw Error(frame.depth_path.empty() ? "Tracker::track" : frame.depth_path, "depth size differs from the camera model");
+    TrackResult result;
+    result.frame_index = frame.index;
+    result.timestamp = frame.timestamp;
+
+    cv::Mat rgb = frame.rgb;
+    if (rgb.size() != frame.depth.size()) cv::resize(frame.rgb, rgb, frame.depth.size(), 0, 0, cv::INTER_AREA);
+    cv::Mat gray;
+    cv::cvtColor(rgb, gray, cv::COLOR_BGR2GRAY);
+
+    auto t0 = Clock::now();
+    cv::Mat depth = frame.depth;
+    if (cfg.depth_repair) {
+      DepthRepairParams rp{cfg.depth_repair_radius, cfg.depth_repair_gray_threshold, cfg.depth_repair_min_support};
+      depth = repair_depth(frame.depth, gray, rp);
+    }
+    result.depth = depth;
+    result.timings.repair_ms = ms_since(t0);
+
+    t0 = Clock::now();
+    FrameFeatures features = extract_features(*orb, gray, depth, intr, cfg.min_depth, cfg.max_depth);
+    std::vector<DepthLevel> frame_pyramid = pyramid(depth);
+    result.timings.features_ms = ms_since(t0);
+
+    if (reference < 0) {  // first frame: world = its camera
+      t0 = Clock::now();
+      make_keyframe(frame, depth, std::move(features), ferns.encode(rgb, depth), std::move(frame_pyramid), -1,
+                    Pose::Identity(), IcpResult{});
+      result.is_keyframe = true;
+      result.reference_keyframe = reference;
+      result.timings.keyframe_ms = ms_since(t0);
+      frames.push_back({frame.index, frame.timestamp, reference, Pose::Identity()});
+      T_ref_last = Pose::Identity();
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        ++stats.frames;
+      }
+      result.timings.total_ms = ms_since(t_start);
+      return result;
+    }
+
+    // Keyframe poses corrected by the pose graph since the last frame: the velocity in world
+    // terms is still valid, the reference pose is simply re-read below.
+    uint64_t version;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      version = pose_version;
+    }
+    seen_version = version;
+
+    const Pose prior = velocity_valid && !lost ? T_ref_last * velocity : T_ref_last;
+    std::shared_ptr<const Keyframe> ref_kf;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      ref_kf = keyframes[reference];
+    }
+    Registration reg = register_to(features, frame_pyramid, ref_kf->features, ref_pyramid, &prior,
+                                   uint32_t(cfg.seed) + uint32_t(frame.index));
+    result.feature_matches = reg.matches;
+    result.ransac_inliers = reg.inliers;
+    result.used_motion_prior = reg.used_prior;
+    result.timings.ransac_ms = reg.ransac_ms;
+    result.timings.icp_ms = reg.icp_ms;
+
+    bool ok = reg.ok;
+    if (std::getenv("SEMAP_TRACKING_DEBUG"))
+      std::fprintf(stderr, "[tracker] frame %zu ref %d ok %d conv %d rmse %.4f overlap %.3f inliers %d prior_t %.3f reg_t %.3f\n",
+                   frame.index, reference, int(reg.ok), int(reg.icp.converged), reg.icp.rmse, reg.icp.overlap,
+                   reg.inliers, prior.translation().norm(), reg.T_kf_frame.translation().norm());
+    auto plausible = [&](const Pose& T_ref_frame) {  // implausible jump from the motion prior = loss (A2)
+      const Pose jump = prior.inverse() * T_ref_frame;
+      return jump.translation().norm() <= cfg.loss_max_translation_jump &&
+             deg(rotation_angle(jump)) <= cfg.loss_max_rotation_jump_deg;
+    };
+    if (ok) ok = plausible(reg.T_kf_frame);
+    if (!ok && !reg.used_prior) {  // features misled ICP: second chance from the motion prior
+      const auto t_icp = Clock::now();
+      const IcpResult second = icp_point_to_plane(frame_pyramid, ref_pyramid, prior, icp_params);
+      if (icp_acceptable(second, cfg.loss_max_icp_rmse, cfg.loss_min_overlap) && plausible(second.T_target_source)) {
+        reg.icp = second;
+        reg.T_kf_frame = second.T_target_source;
+        reg.used_prior = true;
+        result.used_motion_prior = true;
+        ok = true;
+      }
+      result.timings.icp_ms += ms_since(t_icp);
+    }
+    FernCode code = ferns.encode(rgb, depth);
+    t0 = Clock::now();
+    TrackingStatus status = TrackingStatus::ok;
+    if (!ok) {
+      if (relocalise(features, frame_pyramid, code, reg)) {
+        status = TrackingStatus::relocalised;
+        ok = true;
+        std::lock_guard<std::mutex> lock(mutex);
+        ++stats.relocalisations;
+      } else {
+        status = TrackingStatus::lost;
+      }
+    }
+    if (!ok) {
+      // Hold the last pose relative to the current reference until relocalised.
+      lost = true;
+      velocity_valid = false;
+      frames.push_back({frame.index, frame.timestamp, reference, T_ref_last});
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        ++stats.lost_frames;
+        ++stats.frames;
+        result.T_world_camera = kf_pose.at(reference) * T_ref_last;
+      }
+      result.status = status;
+      result.reference_keyframe = reference;
+      result.timings.keyframe_ms = ms_since(t0);
+      result.timings.total_ms = ms_since(t_start);
+      return result;
+    }
+    lost = false;
+    result.icp_matched = reg.icp.matched;
+    result.icp_rmse = reg.icp.rmse;
+    result.icp_overlap = reg.icp.overlap;
+
+    Pose T_ref_frame = reg.T_kf_frame;
+    // Keyframe decision: motion, overlap, or fern dissimilarity (A3).
+    const bool far = T_ref_frame.translation().norm() > cfg.keyframe_translation ||
+                     deg(rotation_angle(T_ref_frame)) > cfg.keyframe_rotation_deg ||
+                     reg.icp.overlap < cfg.keyframe_min_overlap;
+    bool dissimilar = false;
+    if (!far) {
+      std::lock_guard<std::mutex> lock(mutex);
+      dissimilar = ferns.max_similarity(code) < cfg.fern_new_keyframe_similarity;
+    }
+    if (far || dissimilar) {
+      Pose T_world_frame;
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        T_world_frame = kf_pose.at(reference) * T_ref_frame;
+      }
+      if (!(cfg.keyframe_reuse && reuse_keyframe(features, frame_pyramid, T_world_frame, reg, T_ref_frame))) {
+        make_keyframe(frame, depth, std::move(features), std::move(code), std::move(frame_pyramid), reference,
+                      T_ref_frame, reg.icp);
+        result.is_keyframe = true;
+        T_ref_frame = Pose::Identity();
+      }
+    }
+    result.timings.keyframe_ms = ms_since(t0);
+
+    frames.push_back({frame.index, frame.timestamp, reference, T_ref_frame});
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      result.T_world_camera = kf_pose.at(reference) * T_ref_frame;
+      // Velocity from consecutive world poses (both read with the same keyframe poses).
+      const FrameRecord& prev = frames[frames.size() - 2];
+      const Pose prev_world = kf_pose.at(prev.reference) * prev.T_ref_frame;
+      velocity = prev_world.inverse() * result.T_world_camera;
+      velocity_valid = true;
+      ++stats.frames;
+    }
+    T_ref_last = T_ref_frame;
+    result.status = status;
+    result.reference_keyframe = reference;
+    result.timings.total_ms = ms_since(t_start);
+    return result;
+  }
+
+  void make_keyframe(const Frame& frame, const cv::Mat& depth, FrameFeatures features, FernCode code,
+                     std::vector<DepthLevel> frame_pyramid, int parent, const Pose& T_parent_this,
+                     const IcpResult& icp) {
+    auto kf = std::make_shared<Keyframe>();
+    kf->frame_index = frame.index;
+    kf->timestamp = frame.timestamp;
+    kf->depth = depth.clone();
+    kf->features = std::move(features);
+    kf->code = std::move(code);
+    kf->parent = parent;
+    kf->T_parent_this = T_parent_this;
+    int id;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      id = int(keyframes.size());
+      kf->id = id;
+      const Pose pose = parent >= 0 ? kf_pose.at(parent) * T_parent_this : Pose::Identity();
+      kf_pose[id] = pose;
+      keyframes.push_back(kf);
+      if (parent >= 0) {
+        PoseGraphEdge edge;
+        edge.from = parent;
+        edge.to = id;
+        edge.T_from_to = T_parent_this;
+        edge.information = edge_information(icp);
+        graph.add_edge(edge);
+      }
+      ferns.add(id, kf->code);
+      ++stats.keyframes;
+    }
+    reference = id;
+    ref_pyramid = std::move(frame_pyramid);
+    submit_keyframe(id);
+  }
+
+  /// Tracks against an older keyframe near the current pose instead of adding a new one
+  /// (bounds drift when the camera returns); adds a graph edge old reference -> reused.
+  bool reuse_keyframe(const FrameFeatures& features, const std::vector<DepthLevel>& frame_pyramid,
+                      const Pose& T_world_frame, const Registration& current, Pose& T_ref_frame) {
+    int best = -1;
+    double best_score = cfg.keyframe_reuse_max_score;
+    std::shared_ptr<const Keyframe> best_kf;
+    Pose best_pose;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      for (const auto& [id, pose] : kf_pose) {
+        if (id == reference) continue;
+        const Pose rel = pose.inverse() * T_world_frame;
+        const double score = rel.translation().norm() / cfg.keyframe_translation +
+                             deg(rotation_angle(rel)) / cfg.keyframe_rotation_deg;
+        if (score < best_score) {
+          best_score = score;
+          best = id;
+          best_pose = pose;
+        }
+      }
+      if (best >= 0) best_kf = keyframes[best];
+    }
+    if (best < 0) return false;
+    const auto kf_pyramid = pyramid(best_kf->depth);
+    const Pose guess = best_pose.inverse() * T_world_frame;
+    const IcpResult icp = icp_point_to_plane(frame_pyramid, kf_pyramid, guess, icp_params);
+    if (!icp_acceptable(icp, cfg.loss_max_icp_rmse, cfg.keyframe_min_overlap)) return false;
+    const Pose jump = guess.inverse() * icp.T_target_source;
+    if (jump.translation().norm() > cfg.loss_max_translation_jump ||
+        deg(rotation_angle(jump)) > cfg.loss_max_rotation_jump_deg)
+      return false;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      PoseGraphEdge edge;
+      edge.from = reference;
+      edge.to = best;
+      edge.T_from_to = current.T_kf_frame * icp.T_target_source.inverse();
+      // The chained measurement is no better than the weaker of its two registrations.
+      const Matrix6d a = edge_information(current.icp), b = edge_information(icp);
+      edge.information = a.trace() < b.trace() ? a : b;
+      graph.add_edge(edge);
+      ++stats.keyframe_reuses;
+    }
+    reference = best;
+    ref_pyramid = kf_pyramid;
+    T_ref_frame = icp.T_target_source;
+    return true;
+  }
+
+  /// Registers a lost frame against the keyframes most similar by ferns (A3).
+  bool relocalise(const FrameFeatures& features, const std::vector<DepthLevel>& frame_pyramid,
+                  const FernCode& code, Registration& out) {
+    std::vector<std::pair<double, std::shared_ptr<const Keyframe>>> candidates;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      const auto sims = ferns.similarities(code);
+      for (size_t i = 0; i < sims.size(); ++i) candidates.emplace_back(sims[i], keyframes[ferns.ids()[i]]);
+    }
+    std::stable_sort(candidates.begin(), candidates.end(),
+                     [](const auto& a, const auto& b) { return a.first > b.first; });
+    if (int(candidates.size()) > cfg.relocalisation_candidates) candidates.resize(cfg.relocalisation_candidates);
+    for (const auto& [sim, kf] : candidates) {
+      auto kf_pyramid = kf->id == reference ? ref_pyramid : pyramid(kf->depth);
+      Registration reg = register_to(features, frame_pyramid, kf->features, kf_pyramid, nullptr,
+                                     uint32_t(cfg.seed) + 104729u * uint32_t(kf->id + 1));
+      // Without a prior only a clear registration counts (repetitive texture fools RANSAC).
+      if (!reg.ok || reg.icp.overlap < cfg.keyframe_min_overlap) continue;
+      out = reg;
+      reference = kf->id;
+      ref_pyramid = std::move(kf_pyramid);
+      velocity_valid = false;
+      return true;
+    }
+    return false;
+  }
+
+  Trajectory trajectory_locked() const {
+    Trajectory out;
+    out.reserve(frames.size());
+    for (const auto& f : frames) out.push_back({f.timestamp, orthonormalized(kf_pose.at(f.reference) * f.T_ref_frame)});
+    return out;
+  }
+};
+
+Tracker::Tracker(const TrackingConfig& config, const CameraModel& camera)
+    : impl_(std::make_unique<Impl>(config, camera)) {}
+Tracker::~Tracker() = default;
+
+TrackResult Tracker::track(const Frame& frame) { return impl_->track(frame); }
+
+Trajectory Tracker::finish() {
+  if (impl_->cfg.background_loop_closure) impl_->wait_idle();
+  if (impl_->cfg.pose_graph) impl_->optimise();
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  return impl_->trajectory_locked();
+}
+
+Trajectory Tracker::trajectory() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  return impl_->trajectory_locked();
+}
+
+std::vector<KeyframeInfo> Tracker::keyframes() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  std::vector<KeyframeInfo> out;
+  for (const auto& kf : impl_->keyframes)
+    out.push_back({kf->id, kf->frame_index, kf->timestamp, impl_->kf_pose.at(kf->id)});
+  return out;
+}
+
+TrackerStats Tracker::stats() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  TrackerStats s = impl_->stats;
+  s.keyframes = impl_->keyframes.size();
+  return s;
+}
+
+const TrackingConfig& Tracker::config() const { return impl_->cfg; }
+
+}  // namespace semap

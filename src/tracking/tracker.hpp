@@ -1,0 +1,83 @@
+#pragma once
+// Camera tracking (METHODS.md A1-A4): depth repair, frame-to-keyframe odometry (ORB + voting
+// RANSAC + point-to-plane ICP), random-ferns keyframe database for relocalisation and loop
+// closure, and a keyframe pose graph (Ceres).
+//
+// Poses: T_world_camera, world = first frame's camera. Every frame is stored relative to its
+// reference keyframe, so corrections of keyframe poses (pose graph) move the frames with them.
+#include <memory>
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "core/camera.hpp"
+#include "core/frame.hpp"
+#include "core/pose.hpp"
+#include "tracking/tracking_config.hpp"
+
+namespace semap {
+
+enum class TrackingStatus { ok, lost, relocalised };
+const char* to_string(TrackingStatus status);
+
+/// Milliseconds spent in each part of Tracker::track (per-frame path only).
+struct TrackTimings {
+  double repair_ms = 0, features_ms = 0, ransac_ms = 0, icp_ms = 0, keyframe_ms = 0, total_ms = 0;
+};
+
+struct TrackResult {
+  size_t frame_index = 0;
+  double timestamp = 0.0;
+  Pose T_world_camera = Pose::Identity();  ///< current best estimate (uses the latest keyframe poses)
+  bool is_keyframe = false;                ///< this frame became a new keyframe
+  TrackingStatus status = TrackingStatus::ok;
+  int reference_keyframe = -1;             ///< keyframe id the frame was registered against
+  int feature_matches = 0;                 ///< ORB matches to the reference keyframe
+  int ransac_inliers = 0;                  ///< voting-RANSAC inliers (0 when RANSAC failed)
+  bool used_motion_prior = false;          ///< ICP started from the motion prior (too few inliers)
+  int icp_matched = 0;
+  double icp_rmse = 0.0;                   ///< metres
+  double icp_overlap = 0.0;                ///< matched fraction of the frame's points
+  cv::Mat depth;                           ///< depth used for tracking (repaired when enabled), CV_32FC1 metres
+  TrackTimings timings;
+};
+
+struct KeyframeInfo {
+  int id = 0;
+  size_t frame_index = 0;
+  double timestamp = 0.0;
+  Pose T_world_camera = Pose::Identity();  ///< latest (optimised) pose
+};
+
+struct TrackerStats {
+  size_t frames = 0, keyframes = 0, lost_frames = 0, relocalisations = 0;
+  size_t loop_edges = 0, keyframe_reuses = 0, optimisations = 0;
+};
+
+class Tracker {
+ public:
+  /// Validates the config (throws semap::Error). Colour must be registered to depth (an image of
+  /// another size is resized to the depth size).
+  Tracker(const TrackingConfig& config, const CameraModel& camera);
+  ~Tracker();
+  Tracker(const Tracker&) = delete;
+  Tracker& operator=(const Tracker&) = delete;
+
+  /// Tracks one frame (frames in sequence order). Throws semap::Error for empty/mistyped images.
+  TrackResult track(const Frame& frame);
+  /// Waits for pending loop closure, runs the final pose-graph optimisation and returns the
+  /// pose of EVERY tracked frame (optimised keyframe pose * relative pose to it).
+  Trajectory finish();
+  /// Every tracked frame with the current keyframe poses (no waiting, no optimisation).
+  Trajectory trajectory() const;
+  /// Keyframes with their latest poses; after finish() these are the optimised poses the map
+  /// should be re-integrated with.
+  std::vector<KeyframeInfo> keyframes() const;
+  TrackerStats stats() const;
+  const TrackingConfig& config() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace semap
