@@ -1,0 +1,292 @@
+// bench_tsdf: our TSDF integrators against Open3D's ScalableTSDFVolume on the SAME frames in one
+// process (tum_fr1_rpy with ground-truth poses, and a synthetic sequence), 2 threads each, at
+// 1, 2 and 5 cm. Prints JSON: ms/frame, ratio Open3D/ours, bytes per allocated voxel, mesh
+// extraction time, and the block hash table against std::unordered_map (METHODS B4).
+//
+//   build/bench/bench_tsdf [--frames 200] [--synthetic-frames 60] [--threads 2]
+//                          [--voxels 0.01,0.02,0.05] [--synthetic DIR]
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <sstream>
+#include <unordered_map>
+#include <map>
+#include <cstring>
+#include <unistd.h>
+
+#include "core/paths.hpp"
+#include "io/dataset.hpp"
+#include "synth/synth_config.hpp"
+#include "tsdf/semantic_tsdf.hpp"
+
+#ifdef SEMAP_HAVE_OPEN3D
+#include <dlfcn.h>
+
+#include <open3d/camera/PinholeCameraIntrinsic.h>
+#include <open3d/geometry/Image.h>
+#include <open3d/geometry/RGBDImage.h>
+#include <open3d/geometry/TriangleMesh.h>
+#include <open3d/pipelines/integration/ScalableTSDFVolume.h>
+#include <open3d/pipelines/integration/UniformTSDFVolume.h>
+#endif
+
+using namespace semap;
+using Clock = std::chrono::steady_clock;
+namespace fs = std::filesystem;
+
+namespace {
+
+double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+struct Sequence {
+  std::string name;
+  PinholeIntrinsics K;
+  std::vector<IntegrationInput> frames;
+  bool real_labels = false;
+};
+
+Sequence load_sequence(const std::string& name, const fs::path& root, int max_frames) {
+  auto reader = open_dataset(root);
+  Sequence seq;
+  seq.name = name;
+  seq.K = reader->camera().depth;
+  for (size_t i = 0; i < reader->size() && static_cast<int>(seq.frames.size()) < max_frames; ++i) {
+    Frame f = reader->load(i);
+    if (!f.gt_T_world_camera) continue;
+    IntegrationInput in = make_integration_input(f, seq.K, *f.gt_T_world_camera);
+    if (in.labels.empty()) {
+      // No label ground truth (TUM): synthetic labels (depth bands) so the label layers work.
+      in.labels = cv::Mat(in.depth.size(), CV_8UC1);
+      for (int v = 0; v < in.depth.rows; ++v)
+        for (int u = 0; u < in.depth.cols; ++u)
+          in.labels.at<uint8_t>(v, u) = static_cast<uint8_t>(1 + static_cast<int>(in.depth.at<float>(v, u) * 4) % 20);
+    } else {
+      seq.real_labels = true;
+    }
+    seq.frames.push_back(in);
+  }
+  return seq;
+}
+
+struct Variant {
+  std::string name;
+  std::string integrator;
+  bool labels, bayes, colour;
+};
+
+nlohmann::json run_ours(const Sequence& seq, double voxel, const Variant& v, int threads, TsdfMap** keep = nullptr) {
+  TsdfConfig cfg;
+  cfg.voxel_size = voxel;
+  cfg.integrator = v.integrator;
+  cfg.threads = threads;
+  cfg.label_layer = v.labels;
+  cfg.bayes_layer = v.bayes;
+  cfg.colour_layer = v.colour;
+  cfg.max_range = 4.0;
+  auto tsdf = std::make_unique<SemanticTsdf>(cfg);
+  double total = 0;
+  for (const IntegrationInput& frame : seq.frames) {
+    IntegrationInput in = frame;
+    if (!v.labels && !v.bayes) in.labels = cv::Mat();
+    if (!v.colour) in.colour = cv::Mat();
+    const auto t0 = Clock::now();
+    tsdf->integrate(in);
+    total += ms_since(t0);
+  }
+  const auto t0 = Clock::now();
+  const TriangleMesh mesh = MeshExtractor(threads).extract_full(tsdf->map());
+  const double mesh_ms = ms_since(t0);
+  const TsdfMap& map = tsdf->map();
+  nlohmann::json j;
+  j["variant"] = v.name;
+  j["ms_per_frame"] = total / seq.frames.size();
+  j["blocks"] = map.num_blocks();
+  j["allocated_voxels"] = map.num_blocks() * kBlockVoxels;
+  j["bytes_per_voxel_layers"] = map.bytes_per_voxel();
+  j["bytes_per_allocated_voxel_total"] =
+      static_cast<double>(map.memory_bytes()) / std::max<size_t>(1, map.num_blocks() * kBlockVoxels);
+  j["memory_mb"] = map.memory_bytes() / 1e6;
+  j["mesh_ms"] = mesh_ms;
+  j["mesh_triangles"] = mesh.triangles.size();
+  if (keep) {
+    static std::unique_ptr<SemanticTsdf> holder;
+    holder = std::move(tsdf);
+    *keep = &holder->map();
+  }
+  return j;
+}
+
+#ifdef SEMAP_HAVE_OPEN3D
+nlohmann::json run_open3d(const Sequence& seq, double voxel, int threads) {
+  namespace o3d = open3d;
+  // Open3D's OpenMP (libgomp, loaded with Open3D) limited to `threads` without linking it here.
+  if (auto set_threads = reinterpret_cast<void (*)(int)>(dlsym(RTLD_DEFAULT, "omp_set_num_threads")))
+    set_threads(threads);
+  else
+    std::cerr << "warning: omp_set_num_threads not found; set OMP_NUM_THREADS\n";
+  o3d::pipelines::integration::ScalableTSDFVolume volume(voxel, 4 * voxel,
+                                                         o3d::pipelines::integration::TSDFVolumeColorType::RGB8);
+  const o3d::camera::PinholeCameraIntrinsic intrinsic(seq.K.width, seq.K.height, seq.K.fx, seq.K.fy, seq.K.cx,
+                                                      seq.K.cy);
+  double total = 0;
+  for (const IntegrationInput& f : seq.frames) {
+    o3d::geometry::Image depth, colour;
+    depth.Prepare(f.depth.cols, f.depth.rows, 1, 4);
+    std::memcpy(depth.data_.data(), f.depth.data, f.depth.total() * 4);
+    colour.Prepare(f.colour.cols, f.colour.rows, 3, 1);
+    for (int v = 0; v < f.colour.rows; ++v)
+      for (int u = 0; u < f.colour.cols; ++u) {
+        const cv::Vec3b bgr = f.colour.at<cv::Vec3b>(v, u);
+        uint8_t* rgb = colour.data_.data() + 3 * (static_cast<size_t>(v) * f.colour.cols + u);
+        rgb[0] = bgr[2];
+        rgb[1] = bgr[1];
+        rgb[2] = bgr[0];
+      }
+    auto rgbd = o3d::geometry::RGBDImage::CreateFromColorAndDepth(colour, depth, 1.0, 4.0, false);
+    const Eigen::Matrix4d extrinsic = f.T_world_camera.inverse().matrix();
+    const auto t0 = Clock::now();
+    volume.Integrate(*rgbd, intrinsic, extrinsic);
+    total += ms_since(t0);
+  }
+  const auto t0 = Clock::now();
+  auto mesh = volume.ExtractTriangleMesh();
+  const double mesh_ms = ms_since(t0);
+  const size_t units = volume.volume_units_.size();
+  const size_t res = volume.volume_unit_resolution_;
+  const size_t voxels = units * res * res * res;
+  nlohmann::json j;
+  j["variant"] = "open3d_scalable_rgb8";
+  j["ms_per_frame"] = total / seq.frames.size();
+  j["allocated_voxels"] = voxels;
+  j["bytes_per_voxel_layers"] = sizeof(o3d::geometry::TSDFVoxel);
+  j["memory_mb"] = voxels * sizeof(o3d::geometry::TSDFVoxel) / 1e6;
+  j["mesh_ms"] = mesh_ms;
+  j["mesh_triangles"] = mesh->triangles_.size();
+  return j;
+}
+#endif
+
+nlohmann::json hash_benchmark(const TsdfMap& map) {
+  std::vector<BlockIndex> keys;
+  for (const auto& b : map.blocks()) keys.push_back(b->index);
+  std::mt19937 rng(1);
+  std::vector<BlockIndex> queries;
+  for (int i = 0; i < 4000000; ++i) {
+    BlockIndex k = keys[rng() % keys.size()];
+    if (rng() % 4 == 0) k += BlockIndex(0, 0, 1000);  // a miss
+    queries.push_back(k);
+  }
+  BlockHashTable own;
+  std::unordered_map<BlockIndex, int32_t, BlockHash> stl;
+  auto t0 = Clock::now();
+  for (size_t i = 0; i < keys.size(); ++i) own.insert(keys[i], static_cast<int32_t>(i));
+  const double own_insert = ms_since(t0);
+  t0 = Clock::now();
+  for (size_t i = 0; i < keys.size(); ++i) stl.emplace(keys[i], static_cast<int32_t>(i));
+  const double stl_insert = ms_since(t0);
+  int64_t sum = 0;
+  t0 = Clock::now();
+  for (const auto& q : queries) sum += own.find(q);
+  const double own_find = ms_since(t0);
+  t0 = Clock::now();
+  for (const auto& q : queries) {
+    auto it = stl.find(q);
+    sum += it == stl.end() ? -1 : it->second;
+  }
+  const double stl_find = ms_since(t0);
+  nlohmann::json j;
+  j["blocks"] = keys.size();
+  j["open_addressing_ns_per_lookup"] = own_find * 1e6 / queries.size();
+  j["unordered_map_ns_per_lookup"] = stl_find * 1e6 / queries.size();
+  j["open_addressing_ns_per_insert"] = own_insert * 1e6 / keys.size();
+  j["unordered_map_ns_per_insert"] = stl_insert * 1e6 / keys.size();
+  j["checksum"] = sum;
+  return j;
+}
+
+std::vector<double> parse_list(const std::string& s) {
+  std::vector<double> out;
+  std::stringstream ss(s);
+  std::string item;
+  while (std::getline(ss, item, ',')) out.push_back(std::stod(item));
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int frames = 200, synthetic_frames = 60, threads = 2;
+  std::vector<double> voxels = {0.01, 0.02, 0.05};
+  fs::path synthetic_dir;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string a = argv[i], v = argv[i + 1];
+    if (a == "--frames") frames = std::stoi(v);
+    else if (a == "--synthetic-frames") synthetic_frames = std::stoi(v);
+    else if (a == "--threads") threads = std::stoi(v);
+    else if (a == "--voxels") voxels = parse_list(v);
+    else if (a == "--synthetic") synthetic_dir = v;
+    else {
+      std::cerr << "unknown option " << a << "\n";
+      return 2;
+    }
+  }
+  std::vector<Sequence> sequences;
+  const fs::path tum = data_dir(fs::path(SEMAP_SHARED_DIR) / "data") / "tum_fr1_rpy";
+  if (fs::exists(tum)) sequences.push_back(load_sequence("tum_fr1_rpy", tum, frames));
+  fs::path tmp;
+  if (synthetic_dir.empty() && synthetic_frames > 0) {
+    tmp = fs::temp_directory_path() / ("bench_tsdf_synth_" + std::to_string(::getpid()));
+    SynthConfig cfg;
+    cfg.frames = synthetic_frames;
+    cfg.seed = 7;
+    generate_dataset(cfg, tmp);
+    synthetic_dir = tmp;
+  }
+  if (!synthetic_dir.empty()) sequences.push_back(load_sequence("synthetic", synthetic_dir, synthetic_frames));
+
+  const std::vector<Variant> variants = {
+      {"ours_projective_core", "projective", false, false, false},
+      {"ours_grouped_core", "grouped", false, false, false},
+      {"ours_projective_labels_rgb", "projective", true, false, true},
+      {"ours_grouped_labels_rgb", "grouped", true, false, true},
+      {"ours_projective_labels_bayes_rgb", "projective", true, true, true},
+      {"ours_grouped_labels_bayes_rgb", "grouped", true, true, true},
+  };
+  nlohmann::json out;
+  out["threads"] = threads;
+  for (const Sequence& seq : sequences) {
+    nlohmann::json js;
+    js["frames"] = seq.frames.size();
+    js["width"] = seq.K.width;
+    js["height"] = seq.K.height;
+    js["labels"] = seq.real_labels ? "ground truth" : "synthetic depth bands";
+    for (double voxel : voxels) {
+      nlohmann::json jv = nlohmann::json::array();
+      std::map<std::string, double> ms;
+      for (const Variant& v : variants) {
+        TsdfMap* kept = nullptr;
+        const bool keep = seq.name == "tum_fr1_rpy" && voxel == 0.02 && v.name == "ours_projective_core";
+        nlohmann::json r = run_ours(seq, voxel, v, threads, keep ? &kept : nullptr);
+        ms[v.name] = r["ms_per_frame"];
+        std::cerr << seq.name << " " << voxel << " " << v.name << " " << r["ms_per_frame"] << " ms/frame\n";
+        jv.push_back(r);
+        if (kept) out["block_hash"] = hash_benchmark(*kept);
+      }
+#ifdef SEMAP_HAVE_OPEN3D
+      nlohmann::json o = run_open3d(seq, voxel, threads);
+      std::cerr << seq.name << " " << voxel << " open3d " << o["ms_per_frame"] << " ms/frame\n";
+      for (auto& r : jv) r["ratio_open3d_over_ours"] = o["ms_per_frame"].get<double>() / r["ms_per_frame"].get<double>();
+      jv.push_back(o);
+#endif
+      std::ostringstream key;
+      key << voxel * 100 << "cm";
+      js[key.str()] = jv;
+    }
+    out[seq.name] = js;
+  }
+  if (!tmp.empty()) fs::remove_all(tmp);
+  std::cout << out.dump(2) << std::endl;
+  return 0;
+}
