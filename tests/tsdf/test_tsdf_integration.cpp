@@ -8,6 +8,7 @@
 #include "analytic_scene.hpp"
 #include "core/error.hpp"
 #include "test_support.hpp"
+#include "io/ply_io.hpp"
 #include "tsdf/map_io.hpp"
 #include "tsdf/semantic_tsdf.hpp"
 
@@ -182,6 +183,26 @@ TEST(MapIo, SaveLoadIsExactAndCorruptionIsAnError) {
   }
   EXPECT_THROW(load_map(dir / "version.semap"), Error);
   EXPECT_THROW(load_map(dir / "missing.semap"), Error);
+}
+
+TEST(MeshPly, WrittenMeshCarriesColoursAndLabels) {
+  SemanticTsdf tsdf = fuse(config_for("projective"), 2);
+  test::TempDir dir("tsdf_ply");
+  tsdf.write_mesh(dir / "mesh.ply");
+  const TriangleMesh back = read_ply(dir / "mesh.ply");
+  const TriangleMesh mesh = tsdf.extract_mesh();
+  ASSERT_EQ(back.vertices.size(), mesh.vertices.size());
+  ASSERT_EQ(back.triangles.size(), mesh.triangles.size());
+  ASSERT_TRUE(back.vertices.has_labels());
+  ASSERT_TRUE(back.vertices.has_colours());
+  EXPECT_EQ(back.vertices.labels, mesh.vertices.labels);
+  size_t chair = 0;
+  for (size_t i = 0; i < back.vertices.size(); ++i)
+    if (back.vertices.labels[i] == id(Label::kChair)) {
+      ++chair;
+      EXPECT_EQ(back.vertices.colours[i], class_colour(id(Label::kChair)));
+    }
+  EXPECT_GT(chair, 1000u);
 }
 
 TEST(Integration, InvalidDepthIsSkippedAndBadInputRejected) {
