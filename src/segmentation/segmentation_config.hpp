@@ -93,6 +93,7 @@ struct TemporalFilterConfig {
   std::string method = "none";          ///< none | seed (same pixel, previous frames) | warped (reprojected)
   int window = 5;                       ///< frames compared: current + window-1 previous
   int min_agree = 4;                    ///< previous frames that must give the same label (seed: window-1)
+  int min_views = 2;                    ///< warped: also keep when all previous frames seeing the point agree and >= this many see it
   double depth_tolerance_m = 0.03;      ///< warped: |z_warped - z_previous| allowed, absolute part
   double depth_tolerance_rel = 0.03;    ///< warped: relative part (times depth)
 
@@ -100,6 +101,7 @@ struct TemporalFilterConfig {
     v.param("method", method, "", "none, seed (label kept if the previous frames gave the same pixel the same label) or warped (previous labels reprojected with depth + pose)");
     v.param("window", window, "frames", "current frame plus window-1 previous ones");
     v.param("min_agree", min_agree, "frames", "previous frames that must agree (the seed: window-1); warped: among those that see the point");
+    v.param("min_views", min_views, "frames", "warped: also keep a label when every previous frame that sees the point agrees and at least this many see it");
     v.param("depth_tolerance_m", depth_tolerance_m, "m", "warped: occlusion test, absolute depth tolerance");
     v.param("depth_tolerance_rel", depth_tolerance_rel, "", "warped: occlusion test, tolerance per metre of depth");
   }
@@ -108,6 +110,7 @@ struct TemporalFilterConfig {
                   "must be none, seed or warped");
     require_param(window >= 1 && window <= 32, "segmentation.temporal.window", "must be in [1, 32]");
     require_param(min_agree >= 0 && min_agree <= window - 1, "segmentation.temporal.min_agree", "must be in [0, window-1]");
+    require_param(min_views >= 1 && min_views <= window, "segmentation.temporal.min_views", "must be in [1, window]");
     require_param(depth_tolerance_m >= 0 && depth_tolerance_rel >= 0, "segmentation.temporal.depth_tolerance_m",
                   "must be >= 0");
   }

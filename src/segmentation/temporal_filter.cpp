@@ -39,7 +39,7 @@ cv::Mat TemporalLabelFilter::keep_mask_warped(const cv::Mat& labels, const cv::M
       for (int u = 0; u < labels.cols; ++u) {
         if (!l[u] || !(z[u] > 0.f)) continue;
         const Eigen::Vector3f pc = k.backproject(u, v, z[u]).cast<float>();
-        int agree = 0;
+        int agree = 0, disagree = 0;
         for (size_t f = 0; f < history_.size(); ++f) {
           const Eigen::Vector3f q = R[f] * pc + t[f];
           if (q.z() <= 1e-4f) continue;
@@ -49,9 +49,10 @@ cv::Mat TemporalLabelFilter::keep_mask_warped(const cv::Mat& labels, const cv::M
           if (pu < 0 || pv < 0 || pu >= p.labels.cols || pv >= p.labels.rows) continue;
           const float dz = p.depth.at<float>(pv, pu);
           if (!(dz > 0.f) || std::abs(dz - q.z()) > tol_abs + tol_rel * q.z()) continue;  // occluded / no depth
-          agree += p.labels.at<uint8_t>(pv, pu) == l[u];
+          (p.labels.at<uint8_t>(pv, pu) == l[u] ? agree : disagree)++;
         }
-        out[u] = agree >= config_.min_agree ? 255 : 0;
+        const bool keep = agree >= config_.min_agree || (disagree == 0 && agree >= config_.min_views);
+        out[u] = keep ? 255 : 0;
       }
     }
   });

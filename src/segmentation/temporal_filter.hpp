@@ -9,7 +9,10 @@
 //    surface (|z_warped - depth_prev| <= depth_tolerance_m + depth_tolerance_rel * z).
 //    Pixels without depth cannot be warped and get no label.
 // Both keep a pixel when at least min_agree previous frames agree (min_agree = window-1 is
-// the seed's rule). The first frames, before enough history exists, yield no labels.
+// the seed's rule). "warped" also keeps it when every previous frame that sees the point
+// agrees and at least min_views do (points that entered the view recently, or were occluded,
+// are not dropped for lack of history). The first frames, before enough history exists,
+// yield no labels.
 #include <deque>
 #include <opencv2/core.hpp>
 

@@ -54,9 +54,9 @@ TEST(AsyncSegmenter, SubmitReturnsAtOnceKeepsLatestAndTagsResults) {
   const double submit_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_LT(submit_ms, 40.0);  // never waits for the 50 ms network
   const auto results = async.drain();
-  // Frame 0 is being processed, 1..8 are dropped one by one, 9 (the latest) is kept.
-  ASSERT_GE(results.size(), 2u);
-  EXPECT_LE(results.size(), 3u);
+  // Frame 0 may already be in progress; the rest are dropped one by one and 9 (the latest) is kept.
+  ASSERT_GE(results.size(), 1u);
+  EXPECT_LE(results.size(), 2u);
   EXPECT_EQ(results.back().frame_index, 9u);
   EXPECT_DOUBLE_EQ(results.back().timestamp, 9 / 30.0);
   EXPECT_EQ(results.back().labels.at<uint8_t>(0, 0), 9);
