@@ -1,14 +1,148 @@
+// `semap eval ate|semantic|objects`: the metrics of METHODS.md D on result files.
+// --json prints exactly one JSON object on stdout; otherwise an aligned table.
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
 #include "apps/semap/commands.hpp"
 #include "core/error.hpp"
+#include "eval/object_metrics.hpp"
+#include "eval/semantic_metrics.hpp"
+#include "eval/trajectory_metrics.hpp"
+#include "io/trajectory_io.hpp"
 
 namespace semap::app {
 
+namespace {
+
+struct EvalOptions {
+  std::string gt, est, map;
+  bool json = false;
+  double max_dt = 0.02;
+  double delta_s = 1.0;
+  SemanticEvalOptions semantic;
+  ObjectEvalOptions objects;
+};
+
+void require_file(const std::string& path, const char* flag) {
+  if (path.empty()) throw Error(flag, "missing");
+  if (!std::filesystem::is_regular_file(path)) throw Error(path, "not found (" + std::string(flag) + ")");
+}
+
+void print_json(const nlohmann::json& j) { std::printf("%s\n", j.dump(2).c_str()); }
+
+int run_ate(const EvalOptions& o) {
+  require_file(o.gt, "--gt");
+  require_file(o.est, "--est");
+  const Trajectory gt = read_tum_trajectory(o.gt);
+  const Trajectory est = read_tum_trajectory(o.est);
+  const AteResult ate = compute_ate(gt, est, o.max_dt);
+  const RpeResult rpe = compute_rpe(gt, est, o.delta_s, o.max_dt);
+  if (o.json) {
+    print_json({{"gt", o.gt}, {"est", o.est}, {"gt_poses", gt.size()}, {"est_poses", est.size()},
+                {"max_dt_s", o.max_dt}, {"ate", to_json(ate)},
+                {"rpe", [&] { auto j = to_json(rpe); j["delta_s"] = o.delta_s; return j; }()}});
+    return 0;
+  }
+  std::printf("trajectory   %s vs %s (%zu / %zu poses, %zu associated)\n", o.est.c_str(), o.gt.c_str(),
+              est.size(), gt.size(), ate.matched);
+  std::printf("%-26s %12s\n", "metric", "value");
+  std::printf("%-26s %12.6f\n", "ATE rmse [m]", ate.rmse);
+  std::printf("%-26s %12.6f\n", "ATE mean [m]", ate.mean);
+  std::printf("%-26s %12.6f\n", "ATE median [m]", ate.median);
+  std::printf("%-26s %12.6f\n", "ATE max [m]", ate.max);
+  std::printf("%-26s %12.6f\n", "RPE trans rmse [m/s]", rpe.trans_rmse_m_per_s);
+  std::printf("%-26s %12.6f\n", "RPE rot rmse [deg/s]", rpe.rot_rmse_deg_per_s);
+  std::printf("%-26s %12zu\n", "RPE pairs", rpe.pairs);
+  return 0;
+}
+
+int run_semantic(const EvalOptions& o) {
+  require_file(o.gt, "--gt");
+  require_file(o.map, "--map");
+  const SemanticEvaluation e = evaluate_semantic_files(o.gt, o.map, o.semantic);
+  if (o.json) {
+    nlohmann::json j = to_json(e);
+    j["gt"] = o.gt;
+    j["map"] = o.map;
+    j["max_distance_m"] = o.semantic.max_distance_m;
+    j["completeness_distance_m"] = o.semantic.completeness_distance_m;
+    print_json(j);
+    return 0;
+  }
+  std::printf("semantic     %s vs %s (%zu map vertices, %zu GT points)\n", o.map.c_str(), o.gt.c_str(),
+              e.map_vertices, e.gt_points);
+  std::printf("%-14s %8s %10s %8s %10s %12s\n", "class", "IoU", "precision", "recall", "GT points", "map vertices");
+  for (const auto& c : e.classes)
+    std::printf("%-14s %8.4f %10.4f %8.4f %10zu %12zu\n", std::string(class_name(c.class_id)).c_str(), c.iou,
+                c.precision, c.recall, c.gt_points, c.map_vertices);
+  std::printf("%-14s %8.4f  (%zu classes)\n", "mIoU", e.miou, e.classes.size());
+  std::printf("surface error  mean %.4f m, median %.4f m\n", e.surface_error_mean_m, e.surface_error_median_m);
+  std::printf("completeness   %.4f (GT points with a map vertex within %.3f m)\n", e.completeness,
+              o.semantic.completeness_distance_m);
+  return 0;
+}
+
+int run_objects(const EvalOptions& o) {
+  require_file(o.gt, "--gt");
+  require_file(o.map, "--map");
+  const ObjectEvaluation e = evaluate_object_files(o.gt, o.map, o.objects);
+  if (o.json) {
+    nlohmann::json j = to_json(e);
+    j["gt"] = o.gt;
+    j["map"] = o.map;
+    j["voxel_size_m"] = o.objects.voxel_size_m;
+    print_json(j);
+    return 0;
+  }
+  std::printf("objects      %s vs %s (%zu map objects, %zu GT objects)\n", o.map.c_str(), o.gt.c_str(),
+              e.map_objects, e.gt_objects);
+  std::printf("%-14s %6s %6s\n", "class", "GT", "map");
+  for (const auto& c : e.counts)
+    std::printf("%-14s %6zu %6zu\n", std::string(class_name(c.class_id)).c_str(), c.gt, c.map);
+  std::printf("WOv            %.4f (same class only: %.4f)\n", e.wov, e.wov_same_class);
+  for (const auto& m : e.matches)
+    std::printf("IoU >= %.2f    precision %.4f  recall %.4f  (%zu matched)\n", m.iou_threshold, m.precision,
+                m.recall, m.true_positives);
+  return 0;
+}
+
+}  // namespace
+
 void add_eval_command(CLI::App& app, CommandRunner& run) {
-  auto* cmd = app.add_subcommand("eval", "Map a dataset: trajectory, semantic TSDF mesh, object map (not built yet)");
-  cmd->allow_extras();
-  cmd->callback([&run] {
-    run = [] () -> int { throw Error("semap eval", "not built yet"); };
-  });
+  auto* cmd = app.add_subcommand("eval", "Evaluate results: trajectory (ATE/RPE), semantic mesh (mIoU), object map (WOv, P/R)");
+  cmd->require_subcommand(1);
+  auto opt = std::make_shared<EvalOptions>();
+
+  auto* ate = cmd->add_subcommand("ate", "ATE RMSE after SE(3) alignment + RPE (TUM benchmark definitions)");
+  ate->add_option("--gt", opt->gt, "ground-truth TUM trajectory")->required();
+  ate->add_option("--est", opt->est, "estimated TUM trajectory")->required();
+  ate->add_option("--max-dt", opt->max_dt, "max timestamp difference for association [s]")->capture_default_str();
+  ate->add_option("--delta", opt->delta_s, "RPE time delta [s]")->capture_default_str();
+  ate->add_flag("--json", opt->json, "print one JSON object");
+  ate->callback([&run, opt] { run = [opt] { return run_ate(*opt); }; });
+
+  auto* sem = cmd->add_subcommand("semantic", "Per-class IoU / mIoU, surface error, completeness of a labelled mesh");
+  sem->add_option("--gt", opt->gt, "gt_points.ply (x y z label [instance])")->required();
+  sem->add_option("--map", opt->map, "labelled mesh or point cloud PLY")->required();
+  sem->add_option("--max-dist", opt->semantic.max_distance_m, "label-transfer neighbour distance [m]")
+      ->capture_default_str();
+  sem->add_option("--completeness-dist", opt->semantic.completeness_distance_m,
+                  "a GT point is covered by a map vertex within this [m]")
+      ->capture_default_str();
+  sem->add_flag("--json", opt->json, "print one JSON object");
+  sem->callback([&run, opt] { run = [opt] { return run_semantic(*opt); }; });
+
+  auto* obj = cmd->add_subcommand("objects", "Objects per class, WOv, precision/recall at 3D IoU 0.25/0.5");
+  obj->add_option("--gt", opt->gt, "scene.json or gt_points.ply")->required();
+  obj->add_option("--map", opt->map, "objects.json")->required();
+  obj->add_option("--voxel", opt->objects.voxel_size_m, "voxel size of the point-set IoU [m]")
+      ->capture_default_str();
+  obj->add_flag("--json", opt->json, "print one JSON object");
+  obj->callback([&run, opt] { run = [opt] { return run_objects(*opt); }; });
 }
 
 }  // namespace semap::app
