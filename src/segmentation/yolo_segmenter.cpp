@@ -88,11 +88,23 @@ YoloSegmenter::Candidates YoloSegmenter::run_network(const cv::Mat& bgr) {
     else if (o.dims == 4) proto = &o;
   }
   if (!det || !proto) throw Error(model_path_, "not a YOLO-seg model: outputs are not [1,C,N] + [1,nm,H,W]");
+  return candidates_from_outputs(*det, *proto, c.letterbox, c.image_size);
+}
+
+YoloSegmenter::Candidates YoloSegmenter::candidates_from_outputs(const cv::Mat& det_tensor, const cv::Mat& proto_tensor,
+                                                                 const Letterbox& letterbox, cv::Size image_size) {
+  const cv::Mat* det = &det_tensor;
+  const cv::Mat* proto = &proto_tensor;
+  if (det->dims != 3 || proto->dims != 4 || det->type() != CV_32F || proto->type() != CV_32F)
+    throw Error(model_path_, "not a YOLO-seg model: outputs are not float [1,C,N] + [1,nm,H,W]");
+  Candidates c;
+  c.image_size = image_size;
+  c.letterbox = letterbox;
   const int nm = proto->size[1];
   c.proto_size = {proto->size[3], proto->size[2]};
   // Layout: [1, C, N] (Ultralytics default) or [1, N, C]; N matches the stride-8/16/32 anchors.
   const int a = det->size[1], b = det->size[2];
-  const int expected_n = anchor_count(input_size_);
+  const int expected_n = anchor_count(letterbox.input);
   const bool channels_first = b == expected_n ? true : a == expected_n ? false : a < b;
   const int channels = channels_first ? a : b, n = channels_first ? b : a;
   if (channels <= 4 + nm) throw Error(model_path_, "not a YOLO-seg model: detection tensor has too few channels");
@@ -122,10 +134,10 @@ YoloSegmenter::Candidates YoloSegmenter::run_network(const cv::Mat& bgr) {
     const float* s = r + 4;
     const int best = int(std::max_element(s, s + nc) - s);
     // Box: input pixels -> image pixels (undo the letterbox), clipped to the image.
-    const double x1 = std::clamp((r[0] - r[2] / 2 - lb.pad_x) / lb.scale, 0.0, double(bgr.cols));
-    const double y1 = std::clamp((r[1] - r[3] / 2 - lb.pad_y) / lb.scale, 0.0, double(bgr.rows));
-    const double x2 = std::clamp((r[0] + r[2] / 2 - lb.pad_x) / lb.scale, 0.0, double(bgr.cols));
-    const double y2 = std::clamp((r[1] + r[3] / 2 - lb.pad_y) / lb.scale, 0.0, double(bgr.rows));
+    const double x1 = std::clamp((r[0] - r[2] / 2 - lb.pad_x) / lb.scale, 0.0, double(image_size.width));
+    const double y1 = std::clamp((r[1] - r[3] / 2 - lb.pad_y) / lb.scale, 0.0, double(image_size.height));
+    const double x2 = std::clamp((r[0] + r[2] / 2 - lb.pad_x) / lb.scale, 0.0, double(image_size.width));
+    const double y2 = std::clamp((r[1] + r[3] / 2 - lb.pad_y) / lb.scale, 0.0, double(image_size.height));
     c.boxes.push_back({cv::Rect2f(float(x1), float(y1), float(x2 - x1), float(y2 - y1)), s[best], best});
     c.class_scores.emplace_back(s, s + nc);
     std::copy(r + 4 + nc, r + 4 + nc + nm, c.coefficients.ptr<float>(int(k)));

@@ -36,6 +36,10 @@ class YoloSegmenter : public Segmenter {
     cv::Size image_size;
   };
   Candidates run_network(const cv::Mat& bgr);
+  /// Candidates from the two output tensors (any input size / grid / class count, either
+  /// detection layout); exposed so the decoder can be tested without a network.
+  Candidates candidates_from_outputs(const cv::Mat& detections, const cv::Mat& prototypes, const Letterbox& letterbox,
+                                     cv::Size image_size);
   /// NMS (as configured) + masks + class mapping on candidates.
   SegmentationResult decode(const Candidates& candidates);
 

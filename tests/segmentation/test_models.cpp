@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "core/error.hpp"
 #include "segmentation/segmenter_factory.hpp"
@@ -174,6 +175,62 @@ TEST(SegmenterFactory, SpecsAndErrors) {
     EXPECT_EQ(make_segmenter(deeplab.string(), config, camera)->name(), "semantic:" + deeplab.string());
   }
 }
+
+}  // namespace
+}  // namespace semap
+
+namespace semap {
+namespace {
+
+// The decoder takes the anchor count, prototype grid, class count and layout from the
+// tensors: a 640 export ([1,116,8400] + [1,32,160,160]) decodes with the same code. (The
+// shared 320 file has fixed shapes inside its graph, so it cannot itself run at 640.)
+void check_640_decode(bool transposed) {
+  REQUIRE_MODEL(path, "yolov8n-seg-320.onnx");
+  YoloSegmenter seg(path, SegmentationConfig{});
+  const int n = 8400, nc = 80, nm = 32, channels = 4 + nc + nm;
+  const int det_dims[3] = {1, transposed ? n : channels, transposed ? channels : n};
+  cv::Mat det(3, det_dims, CV_32F, cv::Scalar(0));
+  auto at = [&](int ch, int anchor) -> float& {
+    return transposed ? det.ptr<float>()[size_t(anchor) * channels + ch] : det.ptr<float>()[size_t(ch) * n + anchor];
+  };
+  // One cup (COCO 41) box centred at (320, 300) input px, 200 x 160; prototype 0 is +8 in a
+  // disc around the box centre and -8 elsewhere; coefficient 0 = 1.
+  const int anchor = 1234;
+  at(0, anchor) = 320, at(1, anchor) = 300, at(2, anchor) = 200, at(3, anchor) = 160;
+  at(4 + 41, anchor) = 0.9f;
+  at(4 + nc + 0, anchor) = 1.f;
+  const int proto_dims[4] = {1, nm, 160, 160};
+  cv::Mat proto(4, proto_dims, CV_32F, cv::Scalar(0));
+  cv::Mat p0(160, 160, CV_32F, proto.ptr<float>());
+  p0.setTo(-8.f);
+  cv::circle(p0, cv::Point(80, 75), 30, cv::Scalar(8.f), cv::FILLED);  // input (320, 300), radius 120 px
+  // 640x480 image letterboxed into 640x640: scale 1, pad_y 80.
+  Letterbox lb;
+  lb.input = {640, 640};
+  lb.scale = 1.0;
+  lb.pad_x = 0;
+  lb.pad_y = 80;
+  const auto cand = seg.candidates_from_outputs(det, proto, lb, cv::Size(640, 480));
+  ASSERT_EQ(cand.boxes.size(), 1u);
+  EXPECT_EQ(cand.proto_size, cv::Size(160, 160));
+  EXPECT_NEAR(cand.boxes[0].box.x, 220, 1e-3);
+  EXPECT_NEAR(cand.boxes[0].box.y, 140, 1e-3);  // 300 - 80 - 80
+  const SegmentationResult r = seg.decode(cand);
+  ASSERT_EQ(r.instances.size(), 1u);
+  EXPECT_EQ(r.instances[0].class_id, id(Label::kCup));
+  // Expected mask: the disc (centre (320, 220) image px, radius 120) cropped to the box.
+  cv::Mat expected = cv::Mat::zeros(480, 640, CV_8UC1);
+  cv::circle(expected, cv::Point(320, 220), 120, cv::Scalar(255), cv::FILLED);
+  cv::Mat box_mask = cv::Mat::zeros(480, 640, CV_8UC1);
+  box_mask(cv::Rect(220, 140, 200, 160)).setTo(255);
+  expected &= box_mask;
+  EXPECT_GT(mask_iou(r.instances[0].mask, expected), 0.97);
+  EXPECT_EQ(r.instances[0].box, cv::Rect(220, 140, 200, 160));
+}
+
+TEST(YoloSegmenter, Decodes640LayoutFromTensorShapes) { check_640_decode(false); }
+TEST(YoloSegmenter, DecodesTransposedDetectionLayout) { check_640_decode(true); }
 
 }  // namespace
 }  // namespace semap
