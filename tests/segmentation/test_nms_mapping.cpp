@@ -179,3 +179,31 @@ TEST(PrecomputedSegmenter, RoundTripOfWrittenFilesAndExternalJson) {
 
 }  // namespace
 }  // namespace semap
+
+#include "io/dataset.hpp"
+#include "segmentation/segmenter_factory.hpp"
+
+namespace semap {
+namespace {
+
+TEST(GroundTruthSegmenter, YcbFrameThroughTheDatasetReader) {
+  SEMAP_REQUIRE_DATA(root, "ycb_video_0000");
+  const auto dataset = open_dataset(root);
+  const Frame frame = dataset->load(0);
+  if (!frame.has_labels()) GTEST_SKIP() << "io's YCB reader gives no labels";
+  auto seg = make_segmenter("groundtruth", SegmentationConfig{}, dataset->camera());
+  const SegmentationResult r = seg->segment(frame);
+  bool cup = false;
+  for (const auto& inst : r.instances) {
+    cup |= inst.class_id == id(Label::kCup);
+    EXPECT_FLOAT_EQ(inst.score, 1.f);
+    EXPECT_GT(cv::countNonZero(inst.mask), 0);
+  }
+  EXPECT_TRUE(cup) << "the YCB mug (raw id 14) should arrive as a cup";
+  Frame unlabelled = frame;
+  unlabelled.labels.release();
+  EXPECT_THROW(seg->segment(unlabelled), Error);
+}
+
+}  // namespace
+}  // namespace semap
