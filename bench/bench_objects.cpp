@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
 #include <string>
@@ -57,6 +58,34 @@ ObjectSegment random_box_segment(std::mt19937& rng, const Eigen::Vector3f& centr
   s.class_scores[cls] = 1.0;
   return s;
 }
+// Top-down picture (world x-y) of the object points coloured by class, with each object's
+// axis-aligned footprint, id and class.
+void write_topdown(const ObjectMapper& mapper, const std::filesystem::path& path) {
+  Eigen::Vector3f lo = Eigen::Vector3f::Constant(1e9f), hi = -lo;
+  for (const auto& inst : mapper.instances())
+    for (const auto& p : inst.points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  if (lo.x() > hi.x()) return;
+  const float scale = 800.f / std::max(hi.x() - lo.x(), hi.y() - lo.y());
+  cv::Mat image(static_cast<int>((hi.y() - lo.y()) * scale) + 40, static_cast<int>((hi.x() - lo.x()) * scale) + 40,
+                CV_8UC3, cv::Scalar(255, 255, 255));
+  auto px = [&](const Eigen::Vector3f& p) {
+    return cv::Point(static_cast<int>((p.x() - lo.x()) * scale) + 20, static_cast<int>((hi.y() - p.y()) * scale) + 20);
+  };
+  for (const auto& inst : mapper.instances()) {
+    const Rgb8 c = class_colour(inst.class_id());
+    for (const auto& p : inst.points) cv::circle(image, px(p), 1, cv::Scalar(c.b, c.g, c.r), -1);
+  }
+  for (const auto& inst : mapper.instances()) {
+    Eigen::Vector3f box_lo = Eigen::Vector3f::Constant(1e9f), box_hi = -box_lo;
+    for (const auto& p : inst.points) box_lo = box_lo.cwiseMin(p), box_hi = box_hi.cwiseMax(p);
+    cv::rectangle(image, px(box_lo), px(box_hi), cv::Scalar(0, 0, 0), 1);
+    const Eigen::Vector3f centre = inst.centroid();
+    cv::putText(image, std::to_string(inst.id) + " " + std::string(class_name(inst.class_id())), px(centre),
+                cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1);
+  }
+  cv::imwrite(path.string(), image);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -77,30 +106,47 @@ int main(int argc, char** argv) {
     auto segmenter = make_segmenter(model, seg_config, reader->camera());
     ObjectsConfig config;
     config.optimise_every = 10;  // keyframes, not frames
+    if (const char* mode = std::getenv("SEMAP_OBJECTS_MODE")) config.segmentation_mode = mode;
     ObjectMapper mapper(config, reader->camera());
     double network_ms = 0;
+    nlohmann::json summary_pre;
+    std::map<std::string, int> detections;
+    size_t mask_pixels = 0;
+    std::string mask_size;
     for (size_t i = 0; i < reader->size(); i += step) {
       const Frame frame = reader->load(i);
       if (!frame.gt_T_world_camera) continue;
       const auto t0 = Clock::now();
       const SegmentationResult seg = segmenter->segment(frame);
       network_ms += ms(t0, Clock::now());
+      for (const auto& det : seg.instances) {
+        ++detections[std::string(class_name(det.class_id))];
+        mask_pixels += det.mask.empty() ? 0 : cv::countNonZero(det.mask);
+        if (!det.mask.empty()) mask_size = std::to_string(det.mask.cols) + "x" + std::to_string(det.mask.rows);
+      }
       mapper.process(frame, seg, *frame.gt_T_world_camera);
     }
+    summary_pre["instances_before_finish"] = mapper.instances().size();
     mapper.finish();
     mapper.write(out);
-    nlohmann::json summary;
+    nlohmann::json summary = summary_pre;
     summary["keyframes"] = mapper.timings().frames;
     summary["network_ms_per_keyframe"] = network_ms / std::max<size_t>(1, mapper.timings().frames);
     summary["segmentation_ms_per_keyframe"] = mapper.timings().segmentation_ms / std::max<size_t>(1, mapper.timings().frames);
     summary["association_ms_per_keyframe"] = mapper.timings().association_ms / std::max<size_t>(1, mapper.timings().frames);
     std::map<std::string, int> per_class;
-    for (const auto& o : mapper.to_json()["objects"]) {
+    const nlohmann::json doc = mapper.to_json();
+    for (const auto& o : doc["objects"]) {
       ++per_class[o["class"].get<std::string>()];
       summary["objects"].push_back({{"id", o["id"]}, {"class", o["class"]}, {"n", o["n"]}, {"state", o["state"]},
                                     {"centroid", o["centroid"]}, {"extent", o["obb"]["extent"]}});
     }
     summary["per_class"] = per_class;
+    summary["topdown_png"] = (out / "objects_topdown.png").string();
+    write_topdown(mapper, out / "objects_topdown.png");
+    summary["detections_per_class"] = detections;
+    summary["mask_pixels"] = mask_pixels;
+    summary["mask_size"] = mask_size;
     std::cout << summary.dump(2) << std::endl;
     return 0;
   }
