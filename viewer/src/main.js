@@ -121,15 +121,23 @@ function buildMesh(ply) {
     const c = v / 255;
     toLinear[v] = c < 0.04045 ? c * 0.0773993808 : Math.pow(c * 0.9478672986 + 0.0521327014, 2.4);
   }
+  // Unlabelled vertices (palette black) show their RGB as grey levels, else mid grey.
+  // An all-black RGB channel carries no colour (e.g. colour integration off): ignore it.
+  const hasRgb = Boolean(props.red && props.green && props.blue) &&
+    (props.red.some((v) => v > 0) || props.green.some((v) => v > 0) || props.blue.some((v) => v > 0));
   const classColours = new Float32Array(n * 3);
   for (let i = 0; i < n; ++i) {
-    const c = classInfo(labels[i]).colour;
+    let c = classInfo(labels[i]).colour;
+    if (labels[i] === 0) {
+      const grey = hasRgb ? Math.round(0.3 * props.red[i] + 0.59 * props.green[i] + 0.11 * props.blue[i]) : 128;
+      c = [grey, grey, grey];
+    }
     classColours[3 * i] = toLinear[c[0]];
     classColours[3 * i + 1] = toLinear[c[1]];
     classColours[3 * i + 2] = toLinear[c[2]];
   }
   let rgbColours = null;
-  if (props.red && props.green && props.blue) {
+  if (hasRgb) {
     rgbColours = new Float32Array(n * 3);
     for (let i = 0; i < n; ++i) {
       rgbColours[3 * i] = toLinear[props.red[i]];
@@ -185,7 +193,9 @@ function buildMesh(ply) {
   state.classAttribute = classAttribute;
   state.rgbAttribute = rgbAttribute;
   state.isPointCloud = !(ply.indices && ply.indices.length >= 3);
-  for (const cls of counts.keys()) state.visibleClasses.add(cls);
+  // The ceiling hides the room when seen from above: off by default (toggle to show it).
+  const ceilingId = state.classes.findIndex((c) => c && c.name === 'ceiling');
+  for (const cls of counts.keys()) if (cls !== ceilingId || counts.size === 1) state.visibleClasses.add(cls);
   return counts;
 }
 
@@ -220,7 +230,7 @@ function buildClassToggles(counts) {
     row.className = 'class-row';
     const box = document.createElement('input');
     box.type = 'checkbox';
-    box.checked = true;
+    box.checked = state.visibleClasses.has(cls);
     box.dataset.classId = String(cls);
     box.addEventListener('change', () => {
       if (box.checked) state.visibleClasses.add(cls); else state.visibleClasses.delete(cls);
@@ -485,6 +495,12 @@ async function main() {
       const ply = parsePly(await fetchChecked(files.mesh, 'binary'));
       const counts = buildMesh(ply);
       buildClassToggles(counts);
+      updateVisibleClasses();
+      // A map without any labels (segmenter "none") reads better in its fused colours.
+      if (state.rgbAttribute && [...counts.keys()].every((cls) => cls === 0)) {
+        document.getElementById('colour-mode').value = 'rgb';
+        setColourMode('rgb');
+      }
       bounds.union(state.meshGeometry.boundingBox);
       const triangles = ply.indices ? ply.indices.length / 3 : 0;
       showMessage(`mesh: ${ply.vertexCount.toLocaleString()} vertices, ${triangles.toLocaleString()} triangles`);

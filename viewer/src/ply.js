@@ -73,13 +73,51 @@ export function parsePly(buffer) {
     const view = new DataView(buffer, headerLength);
     const little = format === 'binary_little_endian';
     let offset = 0;
+    // Fast paths for the common layouts (fixed-size vertex records; faces as one
+    // 'list uchar int vertex_indices' of triangles): column-wise reads, no per-value dispatch.
+    const readFast = (element) => {
+      if (element.name === 'vertex' && element.properties.every((p) => !p.list)) {
+        const stride = element.properties.reduce((sum, p) => sum + p.type[1], 0);
+        if (offset + stride * element.count > view.byteLength) throw new Error('PLY: truncated binary data');
+        result.vertexCount = element.count;
+        let at = 0;
+        for (const p of element.properties) {
+          const column = new ARRAY_FOR[p.type[0]](element.count);
+          const get = DataView.prototype[`get${p.type[0]}`];
+          for (let i = 0, o = offset + at; i < element.count; ++i, o += stride) column[i] = get.call(view, o, little);
+          result.properties[p.name] = column;
+          at += p.type[1];
+        }
+        offset += stride * element.count;
+        return true;
+      }
+      const p = element.properties[0];
+      if (element.name === 'face' && element.properties.length === 1 && p.list && p.countType[1] === 1 &&
+          p.itemType[1] === 4 && (p.name === 'vertex_indices' || p.name === 'vertex_index')) {
+        const start = faceIndices.length;
+        let o = offset;
+        let triangles = true;
+        for (let i = 0; i < element.count; ++i) {
+          if (o + 1 > view.byteLength) throw new Error('PLY: truncated binary data');
+          if (view.getUint8(o) !== 3) { triangles = false; break; }
+          if (o + 13 > view.byteLength) throw new Error('PLY: truncated binary data');
+          faceIndices.push(view.getUint32(o + 1, little), view.getUint32(o + 5, little), view.getUint32(o + 9, little));
+          o += 13;
+        }
+        if (triangles) { offset = o; return true; }
+        faceIndices.length = start;  // polygons: take the general path
+      }
+      return false;
+    };
     const read = ([kind, size]) => {
       if (offset + size > view.byteLength) throw new Error('PLY: truncated binary data');
       const value = view[`get${kind}`](offset, little);
       offset += size;
       return value;
     };
-    for (const element of elements) readElement(element, read, read, result, faceIndices);
+    for (const element of elements) {
+      if (!readFast(element)) readElement(element, read, read, result, faceIndices);
+    }
   }
   if (faceIndices.length > 0) result.indices = Uint32Array.from(faceIndices);
   return result;
