@@ -76,62 +76,78 @@ struct Variant {
   bool labels, bayes, colour;
 };
 
-nlohmann::json run_ours(const Sequence& seq, double voxel, const Variant& v, int threads, TsdfMap** keep = nullptr) {
-  TsdfConfig cfg;
-  cfg.voxel_size = voxel;
-  cfg.integrator = v.integrator;
-  cfg.threads = threads;
-  cfg.label_layer = v.labels;
-  cfg.bayes_layer = v.bayes;
-  cfg.colour_layer = v.colour;
-  cfg.max_range = 4.0;
-  auto tsdf = std::make_unique<SemanticTsdf>(cfg);
-  double total = 0;
-  for (const IntegrationInput& frame : seq.frames) {
+double cpu_ms() {
+  timespec t;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
+}
+
+/// One system under test; all of them integrate frame i before any moves to frame i + 1, so a
+/// machine shared with other work loads them alike (wall and process-CPU time both recorded).
+struct Runner {
+  std::string name;
+  double wall_ms = 0, cpu_ms_total = 0;
+  virtual ~Runner() = default;
+  virtual void integrate(const IntegrationInput& frame) = 0;
+  virtual nlohmann::json finish(int threads) = 0;
+};
+
+struct OursRunner : Runner {
+  Variant v;
+  std::unique_ptr<SemanticTsdf> tsdf;
+  OursRunner(const Variant& variant, double voxel, int threads) : v(variant) {
+    name = v.name;
+    TsdfConfig cfg;
+    cfg.voxel_size = voxel;
+    cfg.integrator = v.integrator;
+    cfg.threads = threads;
+    cfg.label_layer = v.labels;
+    cfg.bayes_layer = v.bayes;
+    cfg.colour_layer = v.colour;
+    cfg.max_range = 4.0;
+    tsdf = std::make_unique<SemanticTsdf>(cfg);
+  }
+  void integrate(const IntegrationInput& frame) override {
     IntegrationInput in = frame;
     if (!v.labels && !v.bayes) in.labels = cv::Mat();
     if (!v.colour) in.colour = cv::Mat();
+    const double c0 = cpu_ms();
     const auto t0 = Clock::now();
     tsdf->integrate(in);
-    total += ms_since(t0);
+    wall_ms += ms_since(t0);
+    cpu_ms_total += cpu_ms() - c0;
   }
-  const auto t0 = Clock::now();
-  const TriangleMesh mesh = MeshExtractor(threads).extract_full(tsdf->map());
-  const double mesh_ms = ms_since(t0);
-  const TsdfMap& map = tsdf->map();
-  nlohmann::json j;
-  j["variant"] = v.name;
-  j["ms_per_frame"] = total / seq.frames.size();
-  j["blocks"] = map.num_blocks();
-  j["allocated_voxels"] = map.num_blocks() * kBlockVoxels;
-  j["bytes_per_voxel_layers"] = map.bytes_per_voxel();
-  j["bytes_per_allocated_voxel_total"] =
-      static_cast<double>(map.memory_bytes()) / std::max<size_t>(1, map.num_blocks() * kBlockVoxels);
-  j["memory_mb"] = map.memory_bytes() / 1e6;
-  j["mesh_ms"] = mesh_ms;
-  j["mesh_triangles"] = mesh.triangles.size();
-  if (keep) {
-    static std::unique_ptr<SemanticTsdf> holder;
-    holder = std::move(tsdf);
-    *keep = &holder->map();
+  nlohmann::json finish(int threads) override {
+    const auto t0 = Clock::now();
+    const TriangleMesh mesh = MeshExtractor(threads).extract_full(tsdf->map());
+    const double mesh_ms = ms_since(t0);
+    const TsdfMap& map = tsdf->map();
+    nlohmann::json j;
+    j["variant"] = v.name;
+    j["blocks"] = map.num_blocks();
+    j["allocated_voxels"] = map.num_blocks() * kBlockVoxels;
+    j["bytes_per_voxel_layers"] = map.bytes_per_voxel();
+    j["bytes_per_allocated_voxel_total"] =
+        static_cast<double>(map.memory_bytes()) / std::max<size_t>(1, map.num_blocks() * kBlockVoxels);
+    j["memory_mb"] = map.memory_bytes() / 1e6;
+    j["mesh_ms"] = mesh_ms;
+    j["mesh_triangles"] = mesh.triangles.size();
+    return j;
   }
-  return j;
-}
+};
 
 #ifdef SEMAP_HAVE_OPEN3D
-nlohmann::json run_open3d(const Sequence& seq, double voxel, int threads) {
-  namespace o3d = open3d;
-  // Open3D's OpenMP (libgomp, loaded with Open3D) limited to `threads` without linking it here.
-  if (auto set_threads = reinterpret_cast<void (*)(int)>(dlsym(RTLD_DEFAULT, "omp_set_num_threads")))
-    set_threads(threads);
-  else
-    std::cerr << "warning: omp_set_num_threads not found; set OMP_NUM_THREADS\n";
-  o3d::pipelines::integration::ScalableTSDFVolume volume(voxel, 4 * voxel,
-                                                         o3d::pipelines::integration::TSDFVolumeColorType::RGB8);
-  const o3d::camera::PinholeCameraIntrinsic intrinsic(seq.K.width, seq.K.height, seq.K.fx, seq.K.fy, seq.K.cx,
-                                                      seq.K.cy);
-  double total = 0;
-  for (const IntegrationInput& f : seq.frames) {
+struct Open3DRunner : Runner {
+  std::unique_ptr<open3d::pipelines::integration::ScalableTSDFVolume> volume;
+  open3d::camera::PinholeCameraIntrinsic intrinsic;
+  Open3DRunner(const PinholeIntrinsics& K, double voxel)
+      : intrinsic(K.width, K.height, K.fx, K.fy, K.cx, K.cy) {
+    name = "open3d_scalable_rgb8";
+    volume = std::make_unique<open3d::pipelines::integration::ScalableTSDFVolume>(
+        voxel, 4 * voxel, open3d::pipelines::integration::TSDFVolumeColorType::RGB8);
+  }
+  void integrate(const IntegrationInput& f) override {
+    namespace o3d = open3d;
     o3d::geometry::Image depth, colour;
     depth.Prepare(f.depth.cols, f.depth.rows, 1, 4);
     std::memcpy(depth.data_.data(), f.depth.data, f.depth.total() * 4);
@@ -146,26 +162,28 @@ nlohmann::json run_open3d(const Sequence& seq, double voxel, int threads) {
       }
     auto rgbd = o3d::geometry::RGBDImage::CreateFromColorAndDepth(colour, depth, 1.0, 4.0, false);
     const Eigen::Matrix4d extrinsic = f.T_world_camera.inverse().matrix();
+    const double c0 = cpu_ms();
     const auto t0 = Clock::now();
-    volume.Integrate(*rgbd, intrinsic, extrinsic);
-    total += ms_since(t0);
+    volume->Integrate(*rgbd, intrinsic, extrinsic);
+    wall_ms += ms_since(t0);
+    cpu_ms_total += cpu_ms() - c0;
   }
-  const auto t0 = Clock::now();
-  auto mesh = volume.ExtractTriangleMesh();
-  const double mesh_ms = ms_since(t0);
-  const size_t units = volume.volume_units_.size();
-  const size_t res = volume.volume_unit_resolution_;
-  const size_t voxels = units * res * res * res;
-  nlohmann::json j;
-  j["variant"] = "open3d_scalable_rgb8";
-  j["ms_per_frame"] = total / seq.frames.size();
-  j["allocated_voxels"] = voxels;
-  j["bytes_per_voxel_layers"] = sizeof(o3d::geometry::TSDFVoxel);
-  j["memory_mb"] = voxels * sizeof(o3d::geometry::TSDFVoxel) / 1e6;
-  j["mesh_ms"] = mesh_ms;
-  j["mesh_triangles"] = mesh->triangles_.size();
-  return j;
-}
+  nlohmann::json finish(int) override {
+    const auto t0 = Clock::now();
+    auto mesh = volume->ExtractTriangleMesh();
+    const double mesh_ms = ms_since(t0);
+    const size_t res = volume->volume_unit_resolution_;
+    const size_t voxels = volume->volume_units_.size() * res * res * res;
+    nlohmann::json j;
+    j["variant"] = name;
+    j["allocated_voxels"] = voxels;
+    j["bytes_per_voxel_layers"] = sizeof(open3d::geometry::TSDFVoxel);
+    j["memory_mb"] = voxels * sizeof(open3d::geometry::TSDFVoxel) / 1e6;
+    j["mesh_ms"] = mesh_ms;
+    j["mesh_triangles"] = mesh->triangles_.size();
+    return j;
+  }
+};
 #endif
 
 nlohmann::json hash_benchmark(const TsdfMap& map) {
@@ -263,23 +281,33 @@ int main(int argc, char** argv) {
     js["height"] = seq.K.height;
     js["labels"] = seq.real_labels ? "ground truth" : "synthetic depth bands";
     for (double voxel : voxels) {
-      nlohmann::json jv = nlohmann::json::array();
-      std::map<std::string, double> ms;
-      for (const Variant& v : variants) {
-        TsdfMap* kept = nullptr;
-        const bool keep = seq.name == "tum_fr1_rpy" && voxel == 0.02 && v.name == "ours_projective_core";
-        nlohmann::json r = run_ours(seq, voxel, v, threads, keep ? &kept : nullptr);
-        ms[v.name] = r["ms_per_frame"];
-        std::cerr << seq.name << " " << voxel << " " << v.name << " " << r["ms_per_frame"] << " ms/frame\n";
-        jv.push_back(r);
-        if (kept) out["block_hash"] = hash_benchmark(*kept);
-      }
+      std::vector<std::unique_ptr<Runner>> runners;
+      for (const Variant& v : variants) runners.push_back(std::make_unique<OursRunner>(v, voxel, threads));
 #ifdef SEMAP_HAVE_OPEN3D
-      nlohmann::json o = run_open3d(seq, voxel, threads);
-      std::cerr << seq.name << " " << voxel << " open3d " << o["ms_per_frame"] << " ms/frame\n";
-      for (auto& r : jv) r["ratio_open3d_over_ours"] = o["ms_per_frame"].get<double>() / r["ms_per_frame"].get<double>();
-      jv.push_back(o);
+      if (auto set_threads = reinterpret_cast<void (*)(int)>(dlsym(RTLD_DEFAULT, "omp_set_num_threads")))
+        set_threads(threads);  // Open3D's OpenMP (libgomp, loaded with Open3D), without linking it here
+      runners.push_back(std::make_unique<Open3DRunner>(seq.K, voxel));
 #endif
+      for (const IntegrationInput& frame : seq.frames)
+        for (auto& r : runners) r->integrate(frame);
+      const double n = static_cast<double>(seq.frames.size());
+      nlohmann::json jv = nlohmann::json::array();
+      const Runner& o3d = *runners.back();
+      for (auto& r : runners) {
+        nlohmann::json j = r->finish(threads);
+        j["ms_per_frame"] = r->wall_ms / n;
+        j["cpu_ms_per_frame"] = r->cpu_ms_total / n;
+#ifdef SEMAP_HAVE_OPEN3D
+        j["ratio_open3d_over_ours"] = o3d.wall_ms / r->wall_ms;
+        j["cpu_ratio_open3d_over_ours"] = o3d.cpu_ms_total / r->cpu_ms_total;
+#endif
+        std::cerr << seq.name << " " << voxel << " " << r->name << " " << j["ms_per_frame"] << " ms/frame, cpu "
+                  << j["cpu_ms_per_frame"] << " ms/frame\n";
+        jv.push_back(j);
+      }
+      (void)o3d;
+      if (seq.name == "tum_fr1_rpy" && voxel == 0.02)
+        out["block_hash"] = hash_benchmark(static_cast<OursRunner&>(*runners[0]).tsdf->map());
       std::ostringstream key;
       key << voxel * 100 << "cm";
       js[key.str()] = jv;

@@ -454,7 +454,8 @@ class ProjectiveIntegrator final : public Integrator {
     const int W = f.width, H = f.height;
     const float block_size = map.block_size();
     // 1. Blocks crossed by each pixel's truncation band (parallel over fixed row chunks).
-    constexpr int kRowsPerChunk = 8;
+    const int stride = map.config().allocation_stride;
+    const int kRowsPerChunk = 8 * stride;
     const int n_chunks = (H + kRowsPerChunk - 1) / kRowsPerChunk;
     chunk_blocks_.resize(n_chunks);
     std::vector<size_t> valid(n_chunks, 0);
@@ -464,9 +465,9 @@ class ProjectiveIntegrator final : public Integrator {
       // Small direct-mapped cache to skip repeated keys of neighbouring pixels.
       std::array<uint64_t, 64> recent;
       recent.fill(~0ULL);
-      for (int v = c * kRowsPerChunk; v < std::min(H, (c + 1) * kRowsPerChunk); ++v) {
+      for (int v = c * kRowsPerChunk; v < std::min(H, (c + 1) * kRowsPerChunk); v += stride) {
         const float* depth = in.depth.ptr<float>(v);
-        for (int u = 0; u < W; ++u) {
+        for (int u = 0; u < W; u += stride) {
           const float z = depth[u];
           if (!usable_depth(z, f.min_range, f.max_range)) continue;
           ++valid[c];

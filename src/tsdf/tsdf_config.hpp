@@ -15,6 +15,7 @@ struct TsdfConfig {
   double max_range = 5.0;          ///< depth beyond this is skipped, metres
   std::string integrator = "projective";  ///< "grouped" (B5+B6) | "projective" (nvblox/Open3D)
   int threads = 0;                 ///< worker threads, 0 = all cores
+  int allocation_stride = 2;       ///< projective: every n-th pixel (each axis) allocates blocks
 
   // Weight quantisation (METHODS B3): u8 weight on a log scale,
   // W(q) = weight_unit * (exp(q * ln(1 + weight_max / weight_unit) / 255) - 1).
@@ -52,6 +53,8 @@ struct TsdfConfig {
     v.param("max_range", max_range, "m", "depth beyond this is not integrated");
     v.param("integrator", integrator, "", "grouped (semantic grouped ray casting, B5+B6) | projective");
     v.param("threads", threads, "", "integration/meshing threads, 0 = all cores");
+    v.param("allocation_stride", allocation_stride, "px",
+            "projective integrator: every n-th pixel in each axis allocates blocks (Open3D uses 4)");
     v.param("weight_unit", weight_unit, "", "finest step of the log-quantised u8 voxel weight");
     v.param("weight_max", weight_max, "", "maximum accumulated voxel weight W_max (B6)");
     v.param("label_layer", label_layer, "", "keep the compact label byte with its 1-byte vote confidence");
@@ -79,6 +82,7 @@ struct TsdfConfig {
     require_param(integrator == "grouped" || integrator == "projective", "tsdf.integrator",
                   "must be grouped or projective");
     require_param(threads >= 0, "tsdf.threads", "must be >= 0");
+    require_param(allocation_stride >= 1 && allocation_stride <= 16, "tsdf.allocation_stride", "must be in [1, 16]");
     require_param(weight_unit > 0, "tsdf.weight_unit", "must be > 0");
     require_param(weight_max > weight_unit, "tsdf.weight_max", "must be > weight_unit");
     require_param(bayes_top_k >= 1 && bayes_top_k <= 8, "tsdf.bayes_top_k", "must be in [1, 8]");
