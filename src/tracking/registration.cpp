@@ -293,7 +293,9 @@ Accumulator accumulate(const DepthLevel& src, const DepthLevel& tgt, const Pose&
       for (int y = y_begin; y < y_end; ++y) {
         if (y % stride) continue;
         const cv::Vec3f* sv = src.vertices.ptr<cv::Vec3f>(y);
-        const cv::Vec3f* sn = src.normals.empty() ? nullptr : src.normals.ptr<cv::Vec3f>(y);
+        // Normal gate against the target normal only from the source normal where the source
+        // has smooth normals; Kinect normals from 1-pixel differences are too noisy at level 0.
+        const cv::Vec3f* sn = (src.normals.empty() || src.vertices.cols >= 640) ? nullptr : src.normals.ptr<cv::Vec3f>(y);
         for (int x = 0; x < src.vertices.cols; x += stride) {
           const cv::Vec3f& v = sv[x];
           if (std::isnan(v[2])) continue;

@@ -8,6 +8,15 @@
 
 using namespace semap;
 
+// Issue 4 target; not met yet (see the tracking report): fails until tracking improves.
+TEST(TrackingHeavy, TumFr1Rpy200IssueTarget) {
+  SEMAP_REQUIRE_DATA(dir, "tum_fr1_rpy");
+  TrackingConfig config;
+  config.background_loop_closure = false;
+  const auto run = test::run_tracker_on(dir, 200, config);
+  EXPECT_LE(run.ate_rmse, 0.025);
+}
+
 TEST(TrackingHeavy, SevenScenesRedkitchen500) {
   SEMAP_REQUIRE_DATA(dir, "7scenes_redkitchen");
   TrackingConfig config;
