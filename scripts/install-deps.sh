@@ -8,7 +8,7 @@ PACKAGES=(
   libeigen3-dev libopencv-dev libpcl-dev libceres-dev libtbb-dev
   nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev libyaml-cpp-dev
   libgtest-dev libgmock-dev libbenchmark-dev libnanoflann-dev
-  libopen3d-dev
+  libopen3d-dev libcpp-httplib-dev
 )
 # Extra packages can be requested by callers, e.g. the CI adds clang for fuzzing.
 PACKAGES+=("$@")
@@ -19,7 +19,10 @@ for p in "${PACKAGES[@]}"; do
     missing+=("$p")
   fi
 done
-[ ${#missing[@]} -eq 0 ] && exit 0
+if [ ${#missing[@]} -eq 0 ]; then
+  bash "$(dirname "$0")/install-viewer-deps.sh"
+  exit 0
+fi
 
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
@@ -28,3 +31,4 @@ export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq
 $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 echo "semap: dependencies installed"
+bash "$(dirname "$0")/install-viewer-deps.sh"

@@ -40,6 +40,7 @@ struct TrackedFrame {
   Frame frame;                 ///< depth is the repaired depth used for tracking
   Pose T_world_camera;
   bool segment = false;        ///< sent to the segmenter; fusion waits for its labels
+  bool map_objects = false;    ///< its segmentation also feeds the object map
 };
 
 /// What fusion hands to the object map.
@@ -181,6 +182,10 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
   if (ec) throw Error(options.out_dir, "cannot create output folder: " + ec.message());
 
   std::unique_ptr<Segmenter> segmenter = build_segmenter(options, config, *dataset);
+  // Ground-truth / simulated / precomputed labels cost nothing: label every frame for the
+  // TSDF; the object map still takes every N-th frame and keyframes (its C2 step is the cost).
+  const std::string spec = options.segmenter.empty() ? config.segmentation.segmenter : options.segmenter;
+  const bool label_every_frame = segmenter && (options.seg_noise > 0 || spec == "groundtruth" || spec.rfind("precomputed:", 0) == 0);
   std::unique_ptr<Tracker> tracker = use_gt_poses ? nullptr : std::make_unique<Tracker>(config.tracking, camera);
   SemanticTsdf tsdf(config.tsdf);
   ObjectMapper objects(config.objects, camera);
@@ -261,7 +266,8 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
       item.segment = r.is_keyframe && config.segmentation.on_keyframes;
     }
     online_trajectory.push_back({frame.timestamp, item.T_world_camera});
-    item.segment = segmenter && (item.segment || frame.index % config.segmentation.every_n_frames == 0);
+    item.map_objects = segmenter && (item.segment || frame.index % config.segmentation.every_n_frames == 0);
+    item.segment = item.map_objects || label_every_frame;
     item.frame = std::move(frame);
     return item;
   };
@@ -280,7 +286,7 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
           ++segmented_frames;
         }
         fuse(*item, seg);
-        if (seg) {
+        if (seg && item->map_objects) {
           ObjectWork work{std::move(item->frame), std::move(*seg), item->T_world_camera};
           map_objects(work);
         }
@@ -313,7 +319,7 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
           auto result = block ? std::optional(seg_results.wait_take(it->first)) : seg_results.take(it->first);
           if (!result) { ++it; continue; }
           fuse(it->second, *result);
-          if (*result) object_queue.push({std::move(it->second.frame), std::move(**result), it->second.T_world_camera});
+          if (*result && it->second.map_objects) object_queue.push({std::move(it->second.frame), std::move(**result), it->second.T_world_camera});
           it = waiting.erase(it);
         }
       };
@@ -339,7 +345,7 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
             ++segmented_frames;
             segmentation_queue.push(item->frame);
           } else {
-            item->segment = false;
+            item->segment = item->map_objects = false;
             ++dropped_segmentations;
           }
         }
