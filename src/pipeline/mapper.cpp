@@ -13,6 +13,7 @@
 #include "core/error.hpp"
 #include "core/paths.hpp"
 #include "core/progress.hpp"
+#include "eval/object_metrics.hpp"
 #include "eval/semantic_metrics.hpp"
 #include "eval/trajectory_metrics.hpp"
 #include "io/dataset.hpp"
@@ -415,21 +416,38 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
   const nlohmann::json objects_json = objects.to_json();
 
   // --- evaluation against ground truth -----------------------------------------------
+  // The map lives in the tracker's world (first camera); for evaluation it is moved into the
+  // ground-truth world by the ATE alignment (Horn/Umeyama), as the TUM benchmark aligns.
   nlohmann::json evaluation = nlohmann::json::object();
   if (options.evaluate) {
+    Pose T_gt_map = Pose::Identity();
     if (!use_gt_poses && dataset->has_ground_truth()) {
       try {
         const Trajectory gt = dataset->ground_truth();
-        evaluation["ate"] = to_json(compute_ate(gt, trajectory));
+        const AteResult ate = compute_ate(gt, trajectory);
+        T_gt_map = ate.T_gt_est;
+        evaluation["ate"] = to_json(ate);
         evaluation["rpe"] = to_json(compute_rpe(gt, trajectory));
       } catch (const Error& e) {
         spdlog::warn("trajectory evaluation skipped: {}", e.what());
       }
     }
+    const Eigen::Affine3f T = T_gt_map.cast<float>();
     const auto gt_points = dataset->root() / "gt_points.ply";
-    if (std::filesystem::exists(gt_points) && !mesh.vertices.empty()) {
+    if (std::filesystem::exists(gt_points)) {
       const TriangleMesh gt = read_ply(gt_points);
-      evaluation["semantic"] = to_json(evaluate_semantic(gt.vertices, mesh.vertices));
+      if (!mesh.vertices.empty()) {
+        PointCloud aligned = mesh.vertices;
+        for (auto& p : aligned.points) p = T * p;
+        evaluation["semantic"] = to_json(evaluate_semantic(gt.vertices, aligned));
+      }
+      std::vector<EvalObject> map_objects;
+      for (const auto& inst : objects.instances()) {
+        EvalObject o{inst.id, inst.class_id(), inst.points};
+        for (auto& p : o.points) p = T * p;
+        map_objects.push_back(std::move(o));
+      }
+      evaluation["objects"] = to_json(evaluate_objects(gt_objects_from_points(gt.vertices), map_objects));
     }
   }
 
