@@ -5,6 +5,7 @@
 #include <string>
 
 #include "core/error.hpp"
+#include "eval/statistics.hpp"
 #include "eval/nearest_neighbors.hpp"
 #include "io/ply_io.hpp"
 
@@ -14,14 +15,6 @@ namespace {
 constexpr int kNone = kNumClasses;  // "no GT surface" row / "no map vertex" column
 constexpr int kSize = kNumClasses + 1;
 
-double median_of(std::vector<float> values) {
-  if (values.empty()) return 0.0;
-  const size_t mid = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + mid, values.end());
-  double m = values[mid];
-  if (values.size() % 2 == 0) m = 0.5 * (m + *std::max_element(values.begin(), values.begin() + mid));
-  return m;
-}
 
 ClassId checked_label(ClassId c, const char* which) {
   if (c >= kNumClasses) throw Error(which, "label " + std::to_string(c) + " is not a project class id");

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "core/error.hpp"
+#include "eval/statistics.hpp"
 #include "io/association.hpp"
 
 namespace semap {
@@ -26,14 +27,6 @@ void check_finite(const Trajectory& trajectory, const char* which) {
   }
 }
 
-double median_of(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  const size_t mid = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + mid, values.end());
-  double m = values[mid];
-  if (values.size() % 2 == 0) m = 0.5 * (m + *std::max_element(values.begin(), values.begin() + mid));
-  return m;
-}
 
 // Rotation angle via atan2(sin, cos): accurate near 0, unlike acos of the trace.
 double rotation_angle_precise(const Pose& pose) {

@@ -148,4 +148,17 @@ OnnxModelInfo read_onnx_model_info(const std::filesystem::path& path) {
   return info;
 }
 
+cv::dnn::Net load_onnx_net(const std::filesystem::path& model_path) {
+  cv::dnn::Net net;
+  try {
+    net = cv::dnn::readNetFromONNX(model_path.string());
+  } catch (const cv::Exception& e) {
+    throw Error(model_path, std::string("OpenCV cannot load the ONNX model: ") + e.err);
+  }
+  if (net.empty()) throw Error(model_path, "OpenCV cannot load the ONNX model");
+  net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
+  net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
+  return net;
+}
+
 }  // namespace semap

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <opencv2/dnn.hpp>
+
 namespace semap {
 
 struct OnnxTensorInfo {
@@ -21,5 +23,9 @@ struct OnnxModelInfo {
 
 /// Throws semap::Error naming the file when it is missing or not an ONNX model.
 OnnxModelInfo read_onnx_model_info(const std::filesystem::path& path);
+
+/// Loads an ONNX model into cv::dnn on the CPU backend; semap::Error naming the file when
+/// OpenCV cannot load it.
+cv::dnn::Net load_onnx_net(const std::filesystem::path& model_path);
 
 }  // namespace semap

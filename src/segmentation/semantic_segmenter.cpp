@@ -25,14 +25,7 @@ SemanticSegmenter::SemanticSegmenter(const std::filesystem::path& model_path, co
   const int64_t h = nhwc_input_ ? s[1] : s[2], w = nhwc_input_ ? s[2] : s[3];
   input_size_ = {config_.semantic.input_width > 0 ? config_.semantic.input_width : (w > 0 ? int(w) : 513),
                  config_.semantic.input_height > 0 ? config_.semantic.input_height : (h > 0 ? int(h) : 513)};
-  try {
-    net_ = cv::dnn::readNetFromONNX(model_path.string());
-  } catch (const cv::Exception& e) {
-    throw Error(model_path, std::string("OpenCV cannot load the ONNX model: ") + e.err);
-  }
-  if (net_.empty()) throw Error(model_path, "OpenCV cannot load the ONNX model");
-  net_.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
-  net_.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
+  net_ = load_onnx_net(model_path);
   if (config_.threads > 0) cv::setNumThreads(config_.threads);
 }
 

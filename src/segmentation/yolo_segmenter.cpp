@@ -37,14 +37,7 @@ YoloSegmenter::YoloSegmenter(const std::filesystem::path& model_path, const Segm
   } else {
     input_size_ = {in_shape[3] > 0 ? int(in_shape[3]) : 640, in_shape[2] > 0 ? int(in_shape[2]) : 640};
   }
-  try {
-    net_ = cv::dnn::readNetFromONNX(model_path.string());
-  } catch (const cv::Exception& e) {
-    throw Error(model_path, std::string("OpenCV cannot load the ONNX model: ") + e.err);
-  }
-  if (net_.empty()) throw Error(model_path, "OpenCV cannot load the ONNX model");
-  net_.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
-  net_.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
+  net_ = load_onnx_net(model_path);
   output_names_ = net_.getUnconnectedOutLayersNames();
   if (config_.threads > 0) cv::setNumThreads(config_.threads);
   // Class count from the graph's output shape when static, else after the first forward pass.

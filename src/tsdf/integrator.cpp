@@ -177,13 +177,11 @@ struct TouchedBlocks {
   }
 };
 
-// =============================================================================================
-// Grouped ray casting (METHODS B5 + B6)
-// =============================================================================================
-class GroupedIntegrator final : public Integrator {
+// Both integrators: frame set-up, the run inside the configured TBB arena, and the
+// optional drop of far blocks (issue 8 memory bound) are the same; only run() differs.
+class ArenaIntegrator : public Integrator {
  public:
-  explicit GroupedIntegrator(const TsdfConfig& cfg) : arena_(arena_threads(cfg)) {}
-  std::string name() const override { return "grouped"; }
+  explicit ArenaIntegrator(const TsdfConfig& cfg) : arena_(arena_threads(cfg)) {}
 
   void integrate(TsdfMap& map, const IntegrationInput& in) override {
     const FrameSetup f = setup_frame(map, in);
@@ -191,6 +189,21 @@ class GroupedIntegrator final : public Integrator {
     arena_.execute([&] { run(map, in, f); });
     if (map.config().drop_distance > 0) map.remove_blocks_beyond(f.t_wc, static_cast<float>(map.config().drop_distance));
   }
+
+ protected:
+  virtual void run(TsdfMap& map, const IntegrationInput& in, const FrameSetup& f) = 0;
+
+ private:
+  tbb::task_arena arena_;
+};
+
+// =============================================================================================
+// Grouped ray casting (METHODS B5 + B6)
+// =============================================================================================
+class GroupedIntegrator final : public ArenaIntegrator {
+ public:
+  explicit GroupedIntegrator(const TsdfConfig& cfg) : ArenaIntegrator(cfg) {}
+  std::string name() const override { return "grouped"; }
 
  private:
   struct PixelPoint {
@@ -222,7 +235,7 @@ class GroupedIntegrator final : public Integrator {
     int32_t group;
   };
 
-  void run(TsdfMap& map, const IntegrationInput& in, const FrameSetup& f) {
+  void run(TsdfMap& map, const IntegrationInput& in, const FrameSetup& f) override {
     const int W = f.width, H = f.height;
     const size_t n_pixels = static_cast<size_t>(W) * H;
     points_.resize(n_pixels);
@@ -423,7 +436,6 @@ class GroupedIntegrator final : public Integrator {
       if (groups_[g].label != 0) groups_[g].observation = ClassDistribution::from_probabilities(&sums[g * nc], nc, k);
   }
 
-  tbb::task_arena arena_;
   std::vector<PixelPoint> points_;
   std::vector<int32_t> table_;
   std::vector<Group> groups_;
@@ -437,20 +449,13 @@ class GroupedIntegrator final : public Integrator {
 // =============================================================================================
 // Projective integration (nvblox / Open3D style)
 // =============================================================================================
-class ProjectiveIntegrator final : public Integrator {
+class ProjectiveIntegrator final : public ArenaIntegrator {
  public:
-  explicit ProjectiveIntegrator(const TsdfConfig& cfg) : arena_(arena_threads(cfg)) {}
+  explicit ProjectiveIntegrator(const TsdfConfig& cfg) : ArenaIntegrator(cfg) {}
   std::string name() const override { return "projective"; }
 
-  void integrate(TsdfMap& map, const IntegrationInput& in) override {
-    const FrameSetup f = setup_frame(map, in);
-    stats_ = {};
-    arena_.execute([&] { run(map, in, f); });
-    if (map.config().drop_distance > 0) map.remove_blocks_beyond(f.t_wc, static_cast<float>(map.config().drop_distance));
-  }
-
  private:
-  void run(TsdfMap& map, const IntegrationInput& in, const FrameSetup& f) {
+  void run(TsdfMap& map, const IntegrationInput& in, const FrameSetup& f) override {
     const int W = f.width, H = f.height;
     const float block_size = map.block_size();
     // 1. Blocks crossed by each pixel's truncation band (parallel over fixed row chunks).
@@ -563,7 +568,6 @@ class ProjectiveIntegrator final : public Integrator {
     stats_.allocated_blocks = touched.allocated;
   }
 
-  tbb::task_arena arena_;
   std::vector<std::vector<uint64_t>> chunk_blocks_;
   std::vector<ClassDistribution> pixel_observations_;
 };
