@@ -102,6 +102,7 @@ std::vector<ObjectSegment> FrameSegmenter::segment(const Frame& frame, const Seg
     sv.colour_importance = static_cast<float>(config_.colour_importance);
     sv.spatial_importance = static_cast<float>(config_.spatial_importance);
     sv.normal_importance = static_cast<float>(config_.normal_importance);
+    sv.adopt_radius = static_cast<float>(config_.supervoxel_adopt_radius);
     SupervoxelGraph graph = build_supervoxel_graph(cloud.points, cloud.colours, sv);
     const int num_masks = static_cast<int>(seg.instances.size()) + 1;
     for (auto& node : graph.nodes) {

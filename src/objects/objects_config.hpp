@@ -16,6 +16,7 @@ struct ObjectsConfig {
   double colour_importance = 0.2;  ///< VCCS colour weight
   double spatial_importance = 0.4; ///< VCCS spatial weight
   double normal_importance = 1.0;  ///< VCCS normal weight
+  double supervoxel_adopt_radius = 0.03;  ///< m, points VCCS leaves unowned join the nearest supervoxel within this (0: dropped)
   double plane_max_curvature = 0.04;  ///< supervoxels below this curvature may belong to a support plane (C2.4)
   double plane_max_angle_deg = 10.0;  ///< deg, max normal angle between supervoxels of one plane
   double plane_max_distance = 0.02;   ///< m, max point-to-plane distance of a supervoxel centre
@@ -58,6 +59,7 @@ struct ObjectsConfig {
     v.param("colour_importance", colour_importance, "", "VCCS colour weight");
     v.param("spatial_importance", spatial_importance, "", "VCCS spatial weight");
     v.param("normal_importance", normal_importance, "", "VCCS normal weight");
+    v.param("supervoxel_adopt_radius", supervoxel_adopt_radius, "m", "unowned VCCS points join the nearest supervoxel within this; 0 drops them (C2.1)");
     v.param("plane_max_curvature", plane_max_curvature, "", "max supervoxel curvature for support planes (C2.4)");
     v.param("plane_max_angle_deg", plane_max_angle_deg, "deg", "max normal angle within a support plane");
     v.param("plane_max_distance", plane_max_distance, "m", "max distance of a supervoxel centre to its plane");
@@ -94,6 +96,7 @@ struct ObjectsConfig {
     require_param(max_depth > 0, "objects.max_depth", "must be > 0");
     require_param(voxel_resolution > 0, "objects.voxel_resolution", "must be > 0");
     require_param(seed_resolution > voxel_resolution, "objects.seed_resolution", "must exceed voxel_resolution");
+    require_param(supervoxel_adopt_radius >= 0, "objects.supervoxel_adopt_radius", "must be >= 0");
     require_param(weight_background > 0, "objects.weight_background", "must be > 0");
     require_param(weight_different_masks > weight_background, "objects.weight_different_masks",
                   "must exceed weight_background");

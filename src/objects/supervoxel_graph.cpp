@@ -2,6 +2,7 @@
 #include "objects/supervoxel_graph.hpp"
 
 #include <pcl/point_cloud.h>
+#include <pcl/kdtree/kdtree_flann.h>
 #include <pcl/point_types.h>
 #include <pcl/segmentation/supervoxel_clustering.h>
 
@@ -53,10 +54,38 @@ SupervoxelGraph build_supervoxel_graph(const std::vector<Eigen::Vector3f>& point
     graph.nodes.push_back(std::move(node));
   }
   const auto labelled = vccs.getLabeledCloud();
+  std::vector<int> node_of_point(points.size(), -1);
   for (size_t i = 0; i < labelled->size() && i < points.size(); ++i) {
     const auto it = node_of_label.find((*labelled)[i].label);
-    if (it != node_of_label.end()) graph.nodes[it->second].point_indices.push_back(static_cast<int>(i));
+    if (it != node_of_label.end()) node_of_point[i] = it->second;
   }
+  // VCCS leaves voxels no seed's flow reached unowned (isolated and border voxels, thin parts):
+  // they join the supervoxel of the nearest owned point within adopt_radius, so object
+  // borders are not eroded by the supervoxel step.
+  if (params.adopt_radius > 0.f) {
+    pcl::PointCloud<pcl::PointXYZ>::Ptr owned(new pcl::PointCloud<pcl::PointXYZ>);
+    std::vector<int> owned_index;
+    for (size_t i = 0; i < node_of_point.size(); ++i)
+      if (node_of_point[i] >= 0) {
+        owned->push_back(pcl::PointXYZ(points[i].x(), points[i].y(), points[i].z()));
+        owned_index.push_back(static_cast<int>(i));
+      }
+    if (!owned->empty() && owned->size() < points.size()) {
+      pcl::KdTreeFLANN<pcl::PointXYZ> tree;
+      tree.setInputCloud(owned);
+      std::vector<int> nearest(1);
+      std::vector<float> dist_sq(1);
+      const float limit_sq = params.adopt_radius * params.adopt_radius;
+      for (size_t i = 0; i < node_of_point.size(); ++i) {
+        if (node_of_point[i] >= 0 || !points[i].allFinite()) continue;
+        const pcl::PointXYZ q(points[i].x(), points[i].y(), points[i].z());
+        if (tree.nearestKSearch(q, 1, nearest, dist_sq) == 1 && dist_sq[0] <= limit_sq)
+          node_of_point[i] = node_of_point[owned_index[nearest[0]]];
+      }
+    }
+  }
+  for (size_t i = 0; i < node_of_point.size(); ++i)
+    if (node_of_point[i] >= 0) graph.nodes[node_of_point[i]].point_indices.push_back(static_cast<int>(i));
   std::multimap<std::uint32_t, std::uint32_t> adjacency;
   vccs.getSupervoxelAdjacency(adjacency);
   for (const auto& [a, b] : adjacency) {
