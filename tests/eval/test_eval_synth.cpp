@@ -6,23 +6,15 @@
 
 #include "eval/object_metrics.hpp"
 #include "io/ply_io.hpp"
+#include "eval/cli_json.hpp"
 #include "test_support.hpp"
 
 namespace semap {
 namespace {
 
-std::string exe() { return "'" + test::semap_executable().string() + "'"; }
+using test::exe;
+using test::run_json;
 
-nlohmann::json run_json(const std::string& args) {
-  const auto r = test::run_command(exe() + " " + args);
-  EXPECT_EQ(r.exit_code, 0) << r.output;
-  try {
-    return nlohmann::json::parse(r.output);
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "not one JSON object: " << e.what() << "\n" << r.output;
-    return {};
-  }
-}
 
 TEST(EvalSynth, GroundTruthAgainstItself) {
   test::TempDir dir("semap_eval_synth");
