@@ -25,6 +25,7 @@
 #include "pipeline/simulated_segmenter.hpp"
 #include "pipeline/stage_timer.hpp"
 #include "segmentation/segmenter_factory.hpp"
+#include "segmentation/temporal_filter.hpp"
 #include "tracking/depth_repair.hpp"
 #include "tracking/tracker.hpp"
 #include "tsdf/semantic_tsdf.hpp"
@@ -193,6 +194,11 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
   StageTimings timings;
   LabelArchive label_archive;
   SegmentationResults seg_results;
+  // METHODS.md B1: the temporal label filter sits between segmentation and the TSDF. It sees
+  // the labelled frames in frame order (fusion is the only caller). The object map gets the
+  // unfiltered masks: dropping border pixels there only shrinks instances (C2 does its own
+  // consistency through association counts, C5).
+  TemporalLabelFilter temporal_filter(config.segmentation.temporal, camera.depth);
   const DepthRepairParams repair{config.tracking.depth_repair_radius, config.tracking.depth_repair_gray_threshold,
                                  config.tracking.depth_repair_min_support};
 
@@ -218,10 +224,10 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
     IntegrationInput input = make_integration_input(item.frame, camera.depth, item.T_world_camera);
     input.labels = cv::Mat();
     if (seg && seg->has_labels()) {
-      input.labels = seg->labels;
+      input.labels = temporal_filter.apply(seg->labels, item.frame.depth, item.T_world_camera);
       input.confidence = seg->confidence;
       input.probabilities = seg->probabilities;
-      label_archive.store(item.frame.index, seg->labels);
+      label_archive.store(item.frame.index, input.labels);
     }
     tsdf.integrate(input);
     timings.add("tsdf_integration", ms_since(t0));

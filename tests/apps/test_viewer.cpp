@@ -235,30 +235,32 @@ TEST(Viewer, NoServeWritesPageClassesAndManifest) {
   EXPECT_TRUE(manifest["files"]["trajectory"].is_null()) << "absent files must not be listed (no 404s)";
 }
 
-TEST(Viewer, HeadlessChromiumRendersMeshBoxesAndToggles) {
+// Skips (with the reason) when the browser tool chain is absent; otherwise empty.
+std::string browser_missing(const fs::path& viewer_dir, const std::string& chromium) {
+  if (!command_exists("node")) return "node not found: install nodejs (scripts/install-viewer-deps.sh)";
+  if (!fs::exists(chromium)) return chromium + " not found: run scripts/install-viewer-deps.sh (Debian package chromium)";
+  return "";
+}
+
+std::string chromium_path() {
+  return std::getenv("SEMAP_CHROMIUM") ? std::getenv("SEMAP_CHROMIUM") : "/usr/bin/chromium";
+}
+
+// Serves `output` with `semap view`, drives headless Chromium through viewer/test/screenshot.mjs
+// into `shots`, checks the screenshots (mesh covers the canvas, class toggles hide it, no console
+// errors) and returns the script's result.json.
+nlohmann::json check_in_browser(const fs::path& output, const fs::path& shots, const TempDir& temp) {
   const fs::path viewer_dir = SEMAP_VIEWER_SOURCE_DIR;
-  const std::string chromium = std::getenv("SEMAP_CHROMIUM") ? std::getenv("SEMAP_CHROMIUM") : "/usr/bin/chromium";
-  if (!command_exists("node")) GTEST_SKIP() << "node not found: install nodejs (scripts/install-viewer-deps.sh)";
-  if (!fs::exists(chromium)) {
-    GTEST_SKIP() << chromium << " not found: run scripts/install-viewer-deps.sh (Debian package chromium)";
-  }
-  ASSERT_TRUE(fs::exists(viewer_dir / "node_modules/playwright-core/package.json"))
+  const std::string chromium = chromium_path();
+  EXPECT_TRUE(fs::exists(viewer_dir / "node_modules/playwright-core/package.json"))
       << "playwright-core missing: run `npm ci` in " << viewer_dir << " (the build does it)";
-
-  TempDir temp("semap_viewer_browser");
-  fs::path output = temp.path();
-  if (const char* given = std::getenv("SEMAP_VIEWER_TEST_DIR")) output = given;
-  else write_small_output(output);
-
-  // Screenshots stay in the build folder for people to look at.
-  const fs::path shots = fs::path(SEMAP_BINARY_DIR) / "test_output" / "viewer";
   fs::remove_all(shots);
   fs::create_directories(shots);
   const fs::path log = temp / "semap_view.log";
   BackgroundServer server(shell_quote(semap_executable().string()) + " view " + shell_quote(output.string()) +
                               " --port 0",
                           log);
-  ASSERT_TRUE(server.started());
+  EXPECT_TRUE(server.started());
 
   std::string url;
   const std::regex url_pattern(R"((http://127\.0\.0\.1:\d+/viewer/index\.html))");
@@ -269,7 +271,10 @@ TEST(Viewer, HeadlessChromiumRendersMeshBoxesAndToggles) {
     else if (!server.running()) break;
     else std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
-  ASSERT_FALSE(url.empty()) << "semap view printed no URL:\n" << read_file(log);
+  if (url.empty()) {
+    ADD_FAILURE() << "semap view printed no URL:\n" << read_file(log);
+    return nlohmann::json::object();
+  }
 
   const auto browser = run_command("cd " + shell_quote(viewer_dir.string()) + " && timeout 180 node test/screenshot.mjs --url " +
                                    shell_quote(url) + " --out " + shell_quote(shots.string()) + " --chromium " +
@@ -286,13 +291,49 @@ TEST(Viewer, HeadlessChromiumRendersMeshBoxesAndToggles) {
   EXPECT_LT(classes_off, 0.5 * with_mesh) << "switching every class off should hide the mesh";
   EXPECT_TRUE(fs::is_regular_file(shots / "viewer.png"));
 
+  if (!fs::exists(shots / "result.json")) {
+    ADD_FAILURE() << "screenshot.mjs wrote no result.json";
+    return nlohmann::json::object();
+  }
   const auto result = nlohmann::json::parse(read_file(shots / "result.json"));
   EXPECT_TRUE(result["console_errors"].empty()) << result["console_errors"].dump();
-  if (!std::getenv("SEMAP_VIEWER_TEST_DIR")) {
+  return result;
+}
+
+// Screenshots stay in the build folder for people to look at.
+fs::path screenshot_dir(const std::string& name) { return fs::path(SEMAP_BINARY_DIR) / "test_output" / name; }
+
+TEST(Viewer, HeadlessChromiumRendersMeshBoxesAndToggles) {
+  if (const std::string why = browser_missing(SEMAP_VIEWER_SOURCE_DIR, chromium_path()); !why.empty()) GTEST_SKIP() << why;
+  TempDir temp("semap_viewer_browser");
+  fs::path output = temp.path();
+  if (const char* given = std::getenv("SEMAP_VIEWER_TEST_DIR")) output = given;
+  else write_small_output(output);
+
+  const auto result = check_in_browser(output, screenshot_dir("viewer"), temp);
+  if (!std::getenv("SEMAP_VIEWER_TEST_DIR") && !result.empty()) {
     EXPECT_EQ(result["objects"].get<int>(), 2);
     EXPECT_NE(result["object_panel"].get<std::string>().find("812"), std::string::npos)
         << "the first object's panel should show its point count";
   }
+}
+
+// The issue's check: the page loads a real `semap demo` output (a short loop, same pipeline:
+// tracking, noisy segmentation, TSDF, objects) and shows its mesh and object boxes.
+TEST(Viewer, HeadlessChromiumRendersADemoOutput) {
+  if (const std::string why = browser_missing(SEMAP_VIEWER_SOURCE_DIR, chromium_path()); !why.empty()) GTEST_SKIP() << why;
+  TempDir temp("semap_viewer_demo");
+  const fs::path output = temp / "demo";
+  const auto demo = run_command(shell_quote(semap_executable().string()) + " demo --frames 40 --out " +
+                                shell_quote(output.string()) + " 2>&1");
+  ASSERT_EQ(demo.exit_code, 0) << demo.output;
+  ASSERT_TRUE(fs::is_regular_file(output / "mesh.ply"));
+  const auto objects = nlohmann::json::parse(read_file(output / "objects.json"));
+  const size_t object_count = objects["objects"].size();
+  ASSERT_GT(object_count, 0u) << "a demo output should hold objects";
+
+  const auto result = check_in_browser(output, screenshot_dir("viewer_demo"), temp);
+  if (!result.empty()) EXPECT_EQ(result["objects"].get<size_t>(), object_count) << "every object gets a box";
 }
 
 }  // namespace
