@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# Issue 8: the fast test suite (ctest -LE heavy) built and run under AddressSanitizer +
+# UndefinedBehaviorSanitizer in build-asan/ (-O1, line tables), and the pipeline threading tests
+# under ThreadSanitizer in build-tsan/ (SEMAP_TSAN=0 skips them). Any sanitizer report fails:
+# reports abort the process (halt_on_error), and the ctest log is searched as well, since tests
+# that run the semap CLI only see its exit code.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+JOBS=${SEMAP_JOBS:-$(nproc)}
+COMMON=(-G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -DNDEBUG"
+        "-DCMAKE_C_FLAGS_RELWITHDEBINFO=-O1 -DNDEBUG" -DSEMAP_BUILD_BENCH=OFF -DSEMAP_WITH_OPEN3D=OFF)
+SUPP="$PWD/scripts/sanitizer"
+
+fail_on_reports() {  # $1: a log file
+  if grep -nE "ERROR: (Address|Leak|Thread)Sanitizer|WARNING: ThreadSanitizer|runtime error:" "$1" | head -n 20; then
+    echo "semap sanitize: sanitizer reports in $1"; return 1
+  fi
+}
+
+start=$SECONDS
+cmake -S . -B build-asan "${COMMON[@]}" -DSEMAP_SANITIZE=address,undefined >/dev/null
+cmake --build build-asan -j "$JOBS"
+echo "semap sanitize: ASan+UBSan build in $((SECONDS - start)) s"
+export ASAN_OPTIONS=detect_leaks=1:halt_on_error=1:detect_stack_use_after_return=0
+export LSAN_OPTIONS=suppressions=$SUPP/lsan.supp:print_suppressions=0
+export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+t0=$SECONDS
+(cd build-asan && ctest -LE heavy --output-on-failure -j "$JOBS" --timeout 1800)
+fail_on_reports build-asan/Testing/Temporary/LastTest.log
+echo "semap sanitize: ASan+UBSan fast suite passed with no report ($((SECONDS - t0)) s)"
+
+if [ "${SEMAP_TSAN:-1}" = 1 ]; then
+  t0=$SECONDS
+  cmake -S . -B build-tsan "${COMMON[@]}" -DSEMAP_SANITIZE=thread >/dev/null
+  cmake --build build-tsan -j "$JOBS" --target test_pipeline test_segmentation
+  export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$SUPP/tsan.supp"
+  log=build-tsan/tsan.log
+  {
+    build-tsan/tests/segmentation/test_segmentation --gtest_filter='AsyncSegmenter.*'
+    build-tsan/tests/pipeline/test_pipeline --gtest_filter='PipelineTest.*:-PipelineTest.CliRunAndConfigErrors'
+  } >"$log" 2>&1 || { tail -n 80 "$log"; echo "semap sanitize: TSan tests failed"; exit 1; }
+  fail_on_reports "$log"
+  echo "semap sanitize: TSan pipeline threading tests passed with no report ($((SECONDS - t0)) s)"
+fi
+echo "semap sanitize: done in $((SECONDS - start)) s"
