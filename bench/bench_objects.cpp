@@ -2,8 +2,9 @@
 // supervoxel-guided and mask back-projection) and for association + optimisation (C4-C5) on
 // a synthetic sequence, and association time against the number of map instances. Prints JSON.
 //   bench_objects [--frames N] [--step K] [--out DIR]
-//   bench_objects --real DATASET --model yolo:PATH [--step K] [--out DIR]   (real data: ground-truth
-//     poses of the dataset, the network's instances; writes DIR/objects.json and prints the objects)
+//   bench_objects --real DATASET --model yolo:PATH|groundtruth [--step K] [--out DIR] [--config C.yaml]
+//     (real data: ground-truth poses of the dataset, the network's instances; writes DIR/objects.json
+//     and prints the objects; C.yaml is a semap config, its objects section applies)
 #include <chrono>
 #include <ctime>
 #include <cstdlib>
@@ -16,6 +17,7 @@
 #include <string>
 
 #include "io/dataset.hpp"
+#include "pipeline/semap_config.hpp"
 #include "segmentation/segmenter_factory.hpp"
 #include "objects/object_mapper.hpp"
 #include "synth/synth_config.hpp"
@@ -90,7 +92,7 @@ void write_topdown(const ObjectMapper& mapper, const std::filesystem::path& path
 
 int main(int argc, char** argv) {
   int frames = 100, step = 2;
-  std::string real_dataset, model;
+  std::string real_dataset, model, config_path;
   std::filesystem::path out = std::filesystem::temp_directory_path() / "semap_bench_objects";
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string key = argv[i];
@@ -99,6 +101,7 @@ int main(int argc, char** argv) {
     else if (key == "--out") out = argv[i + 1];
     else if (key == "--real") real_dataset = argv[i + 1];
     else if (key == "--model") model = argv[i + 1];
+    else if (key == "--config") config_path = argv[i + 1];
   }
   if (!real_dataset.empty()) {
     const auto reader = open_dataset(real_dataset);
@@ -106,6 +109,7 @@ int main(int argc, char** argv) {
     auto segmenter = make_segmenter(model, seg_config, reader->camera());
     ObjectsConfig config;
     config.optimise_every = 10;  // keyframes, not frames
+    if (!config_path.empty()) config = load_semap_config(config_path).objects;
     if (const char* mode = std::getenv("SEMAP_OBJECTS_MODE")) config.segmentation_mode = mode;
     ObjectMapper mapper(config, reader->camera());
     double network_ms = 0;

@@ -69,9 +69,17 @@ std::vector<ObjectSegment> FrameSegmenter::segment(const Frame& frame, const Seg
   if (std::none_of(mask_index.begin(), mask_index.end(), [](int m) { return m != 0; })) return result;
 
   const bool has_rgb = !frame.rgb.empty() && frame.rgb.type() == CV_8UC3;
+  auto colour_at = [&](int u, int v) {
+    if (!has_rgb) return Rgb8{};
+    const auto& bgr = frame.rgb.at<cv::Vec3b>(v * frame.rgb.rows / height, u * frame.rgb.cols / width);
+    return Rgb8{bgr[2], bgr[1], bgr[0]};
+  };
   FrameCloud cloud;
   const int stride = config_.pixel_stride;
   const bool backprojection = config_.segmentation_mode == "backprojection";
+  // Cloud point index of each stride cell's sample (-1: none), for the dense point pass below.
+  const int cells_u = (width + stride - 1) / stride;
+  std::vector<int> cell_point(static_cast<size_t>(cells_u) * ((height + stride - 1) / stride), -1);
   for (int v = 0; v < height; v += stride) {
     const float* drow = frame.depth.ptr<float>(v);
     for (int u = 0; u < width; u += stride) {
@@ -79,13 +87,9 @@ std::vector<ObjectSegment> FrameSegmenter::segment(const Frame& frame, const Seg
       if (!(z > 0.f) || z > config_.max_depth) continue;
       const int m = mask_index[static_cast<size_t>(v) * width + u];
       if (backprojection && m == 0) continue;
+      cell_point[static_cast<size_t>(v / stride) * cells_u + u / stride] = static_cast<int>(cloud.points.size());
       cloud.points.push_back(intr.backproject(u * sx, v * sy, z).cast<float>());
-      Rgb8 c;
-      if (has_rgb) {
-        const auto& bgr = frame.rgb.at<cv::Vec3b>(v * frame.rgb.rows / height, u * frame.rgb.cols / width);
-        c = Rgb8{bgr[2], bgr[1], bgr[0]};
-      }
-      cloud.colours.push_back(c);
+      cloud.colours.push_back(colour_at(u, v));
       cloud.mask.push_back(m);
     }
   }
@@ -159,6 +163,39 @@ std::vector<ObjectSegment> FrameSegmenter::segment(const Frame& frame, const Seg
     }
   }
 
+  // Dense points (config point_stride < pixel_stride): every point_stride-th pixel joins the
+  // segment of its stride cell's sample when its depth agrees (same surface) and its own mask is
+  // the segment's detection, so the object keeps
+  // the surface of every observation at the map's resolution while C2 runs on the coarser cloud.
+  const int fine = std::min(config_.point_stride, stride);
+  std::vector<int> label_of_point(cloud.points.size(), 0);
+  for (const auto& [label, indices] : points_of_detection)
+    for (int i : indices) label_of_point[i] = label;
+  struct ExtraPoints {
+    std::vector<Eigen::Vector3f> points;
+    std::vector<Rgb8> colours;
+  };
+  std::map<int, ExtraPoints> extra_of_detection;
+  if (fine < stride) {
+    for (int v = 0; v < height; v += fine) {
+      const float* drow = frame.depth.ptr<float>(v);
+      for (int u = 0; u < width; u += fine) {
+        if (u % stride == 0 && v % stride == 0) continue;  // the sample itself
+        const float z = drow[u];
+        if (!(z > 0.f) || z > config_.max_depth) continue;
+        const int sample = cell_point[static_cast<size_t>(v / stride) * cells_u + u / stride];
+        if (sample < 0 || label_of_point[sample] == 0) continue;
+        const float z_sample = cloud.points[sample].z();
+        if (std::abs(z - z_sample) > config_.dense_depth_tolerance * std::max(1.f, z_sample)) continue;
+        // Only where the pixel's own mask confirms the segment: C2 decides at the coarse samples.
+        if (mask_index[static_cast<size_t>(v) * width + u] != label_of_point[sample]) continue;
+        auto& extra = extra_of_detection[label_of_point[sample]];
+        extra.points.push_back(intr.backproject(u * sx, v * sy, z).cast<float>());
+        extra.colours.push_back(colour_at(u, v));
+      }
+    }
+  }
+
   const Eigen::Isometry3f T = T_world_camera.cast<float>();
   for (const auto& [label, indices] : points_of_detection) {
     if (label == 0 || static_cast<int>(indices.size()) < config_.min_segment_points) continue;
@@ -168,11 +205,17 @@ std::vector<ObjectSegment> FrameSegmenter::segment(const Frame& frame, const Seg
     segment.score = det.score;
     segment.class_scores = detection_score_vector(det);
     segment.detection = label - 1;
-    segment.points.reserve(indices.size());
-    segment.colours.reserve(indices.size());
+    const auto extra_it = extra_of_detection.find(label);
+    const size_t extra_count = extra_it == extra_of_detection.end() ? 0 : extra_it->second.points.size();
+    segment.points.reserve(indices.size() + extra_count);
+    segment.colours.reserve(indices.size() + extra_count);
     for (int i : indices) {
       segment.points.push_back(T * cloud.points[i]);
       segment.colours.push_back(cloud.colours[i]);
+    }
+    if (extra_count > 0) {
+      for (const auto& p : extra_it->second.points) segment.points.push_back(T * p);
+      segment.colours.insert(segment.colours.end(), extra_it->second.colours.begin(), extra_it->second.colours.end());
     }
     result.push_back(std::move(segment));
   }

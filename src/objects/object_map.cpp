@@ -217,6 +217,27 @@ OptimisationStats ObjectMap::optimise(size_t step, bool ignore_recency) {
     } else if (config_.enable_delete && inst.association_count + inst.n < config_.delete_fraction * T && !recent) {
       remove[i] = 1;
       ++stats.deleted;
+      // Extension (config absorb_fragments): a rarely seen instance that lies on a STABLE one of
+      // the same class distribution is a partial view of it (its segment just missed the C4
+      // overlap ratio), not a false detection: its surface joins that instance instead of
+      // being thrown away. Same overlap (3) and JS (4) tests as the C5 merge.
+      if (config_.absorb_fragments) {
+        size_t best = instances_.size();
+        double best_overlap = config_.merge_overlap_ratio;
+        for (size_t j = 0; j < instances_.size(); ++j) {
+          if (j == i || remove[j] || instances_[j].state != InstanceState::kStable) continue;
+          if ((instances_[j].centroid() - inst.centroid()).norm() >= config_.association_distance) continue;
+          const double o = overlap(inst.points, instances_[j], config_.overlap_distance);
+          if (o >= best_overlap && js_divergence(inst.mean_scores(), instances_[j].mean_scores()) <= config_.merge_max_js)
+            best = j, best_overlap = o;
+        }
+        if (best < instances_.size()) {
+          // Only the points: the fragment's counts are those of a rejected instance (C5 keeps
+          // the target's class evidence as it was).
+          add_points(instances_[best], inst.points, inst.colours);
+          ++stats.absorbed;
+        }
+      }
     } else {
       inst.state = InstanceState::kUnstable;
     }

@@ -48,6 +48,7 @@ struct ObjectInstance {
 
 struct OptimisationStats {
   int promoted = 0, deleted = 0, merged = 0, pairs_checked = 0;
+  int absorbed = 0;  ///< deleted instances whose points joined a stable one (absorb_fragments)
 };
 
 class ObjectMap {

@@ -9,7 +9,9 @@ namespace semap {
 struct ObjectsConfig {
   // --- C2: per-keyframe segmentation ---
   std::string segmentation_mode = "supervoxel";  ///< "supervoxel" (C2) or "backprojection" (plain masks)
-  int pixel_stride = 2;            ///< use every N-th pixel when building the frame cloud
+  int pixel_stride = 2;            ///< use every N-th pixel when building the frame cloud (C2 clustering)
+  int point_stride = 1;            ///< every N-th pixel gives object points (<= pixel_stride: joins its cell's segment)
+  double dense_depth_tolerance = 0.02;  ///< m per m of depth: a dense point joins its cell's segment within this depth gap
   double max_depth = 5.0;          ///< m, ignore depth beyond this
   double voxel_resolution = 0.01;  ///< m, VCCS voxel size
   double seed_resolution = 0.06;   ///< m, VCCS seed spacing (supervoxel size)
@@ -48,11 +50,14 @@ struct ObjectsConfig {
   double merge_coassociation = 0.7; ///< co-association count must exceed this fraction of s_i or s_j
   double merge_overlap_ratio = 0.3; ///< geometric overlap (C4 formula, smaller onto larger) needed to merge
   double merge_max_js = 0.3;        ///< nats, max Jensen-Shannon divergence of augmented mean scores
+  bool absorb_fragments = true;     ///< extension: a deleted instance's points join a stable same-class instance it overlaps (C5 tests 3, 4)
   bool final_optimisation = true;   ///< finish() runs one more optimisation, ignoring recency
 
   void visit(ParamVisitor& v) {
     v.param("segmentation_mode", segmentation_mode, "", "supervoxel (C2 guided clustering) or backprojection (masks only)");
     v.param("pixel_stride", pixel_stride, "px", "use every N-th pixel for the frame cloud");
+    v.param("point_stride", point_stride, "px", "every N-th pixel gives object points; finer than pixel_stride joins its cell's segment");
+    v.param("dense_depth_tolerance", dense_depth_tolerance, "m/m", "max depth gap (per m of depth) of a dense point to its cell's sample");
     v.param("max_depth", max_depth, "m", "ignore depth beyond this");
     v.param("voxel_resolution", voxel_resolution, "m", "VCCS voxel size (C2.1)");
     v.param("seed_resolution", seed_resolution, "m", "VCCS seed spacing (C2.1)");
@@ -87,12 +92,15 @@ struct ObjectsConfig {
     v.param("merge_coassociation", merge_coassociation, "", "co-association fraction for merging (C5)");
     v.param("merge_overlap_ratio", merge_overlap_ratio, "", "overlap needed for merging (C5)");
     v.param("merge_max_js", merge_max_js, "nats", "max JS divergence for merging (C5)");
+    v.param("absorb_fragments", absorb_fragments, "", "extension to C5: points of a deleted instance overlapping a stable one of its class join it");
     v.param("final_optimisation", final_optimisation, "", "finish() optimises once more, ignoring recency");
   }
   void validate() const {
     require_param(segmentation_mode == "supervoxel" || segmentation_mode == "backprojection",
                   "objects.segmentation_mode", "must be supervoxel or backprojection");
     require_param(pixel_stride >= 1, "objects.pixel_stride", "must be >= 1");
+    require_param(point_stride >= 1, "objects.point_stride", "must be >= 1");
+    require_param(dense_depth_tolerance > 0, "objects.dense_depth_tolerance", "must be > 0");
     require_param(max_depth > 0, "objects.max_depth", "must be > 0");
     require_param(voxel_resolution > 0, "objects.voxel_resolution", "must be > 0");
     require_param(seed_resolution > voxel_resolution, "objects.seed_resolution", "must exceed voxel_resolution");

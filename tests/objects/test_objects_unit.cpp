@@ -194,6 +194,38 @@ TEST(ObjectsMap, DeletionRule) {
   EXPECT_EQ(map.instances().size(), 1u);
 }
 
+TEST(ObjectsMap, DeletedFragmentOfStableInstanceKeepsItsSurface) {
+  ObjectsConfig c = toy_config();
+  c.overlap_ratio = 0.95;  // the glimpse below does not associate (C4)
+  c.reverse_containment = false;
+  const ClassId sofa = id(Label::kSofa), cup = id(Label::kCup);
+  ObjectMap map(c);
+  for (int i = 0; i < 8; ++i) map.associate({cube_segment({0, 0, 0}, 0.2f, sofa)}, i, i + 1);
+  // A rare glimpse half on the sofa, half new surface; and a rare cup far from it.
+  map.associate({cube_segment({0.1f, 0, 0}, 0.2f, sofa)}, 8, 9);
+  map.associate({cube_segment({0.6f, 0, 0}, 0.1f, cup)}, 9, 10);
+  ASSERT_EQ(map.instances().size(), 3u);
+  const size_t before = map.instances()[0].points.size();
+  const auto stats = map.optimise(50, false);
+  EXPECT_EQ(stats.deleted, 2);
+  EXPECT_EQ(stats.absorbed, 1);  // the glimpse's surface joins the sofa, the cup's does not
+  ASSERT_EQ(map.instances().size(), 1u);
+  EXPECT_GT(map.instances()[0].points.size(), before);
+  EXPECT_EQ(map.instances()[0].n, 8);  // counts are not merged
+  Eigen::Vector3f hi = Eigen::Vector3f::Constant(-1e9f);
+  for (const auto& p : map.instances()[0].points) hi = hi.cwiseMax(p);
+  EXPECT_NEAR(hi.x(), 0.29f, 0.011f);
+  EXPECT_LT(hi.x(), 0.5f);
+
+  // Switched off: the glimpse is simply deleted.
+  c.absorb_fragments = false;
+  ObjectMap plain(c);
+  for (int i = 0; i < 8; ++i) plain.associate({cube_segment({0, 0, 0}, 0.2f, sofa)}, i, i + 1);
+  plain.associate({cube_segment({0.1f, 0, 0}, 0.2f, sofa)}, 8, 9);
+  EXPECT_EQ(plain.optimise(50, false).absorbed, 0);
+  EXPECT_EQ(plain.instances()[0].points.size(), before);
+}
+
 TEST(ObjectsMap, MergeRuleNeedsCoAssociationOverlapAndSimilarLabels) {
   ObjectsConfig c = toy_config();
   c.overlap_ratio = 0.95;  // force duplicates: partial views do not associate
