@@ -3,6 +3,7 @@
 // Prints one JSON object. Usage:
 //   bench_tracking [DATASET_DIR] [--frames N] [--no-open3d] [--no-repair-compare]
 //                  [--no-loop-compare] [--deterministic] [--out-trajectory FILE]
+//                  [--set "key: value"]... (tracking parameters, YAML, as in the tracking: section)
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -15,6 +16,7 @@
 
 #include "core/error.hpp"
 #include "eval/trajectory_metrics.hpp"
+#include "io/config_loader.hpp"
 #include "io/dataset.hpp"
 #include "io/trajectory_io.hpp"
 #include "tracking/tracker.hpp"
@@ -147,6 +149,7 @@ int main(int argc, char** argv) {
     size_t max_frames = 0;
     bool open3d = true, repair_compare = true, loop_compare = true, deterministic = false;
     std::string out_trajectory;
+    std::vector<std::string> overrides;
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
       if (a == "--frames" && i + 1 < argc) max_frames = std::stoul(argv[++i]);
@@ -156,6 +159,7 @@ int main(int argc, char** argv) {
       else if (a == "--deterministic") deterministic = true;
       else if (a == "--verbose") verbose = true;
       else if (a == "--out-trajectory" && i + 1 < argc) out_trajectory = argv[++i];
+      else if (a == "--set" && i + 1 < argc) overrides.push_back(argv[++i]);
       else if (!a.empty() && a[0] != '-') dataset = a;
       else throw Error(a, "unknown argument");
     }
@@ -175,6 +179,8 @@ int main(int argc, char** argv) {
     report["threads_hint"] = "run under the project's 2-core budget";
     TrackingConfig config;
     config.background_loop_closure = !deterministic;
+    for (const auto& o : overrides) load_config_string(o, "--set", [&](ParamVisitor& v) { config.visit(v); });
+    config.validate();
     Trajectory traj;
     report["ours"] = run_ours(frames, reader->camera(), config, gt, &traj);
     if (!out_trajectory.empty()) write_tum_trajectory(out_trajectory, traj);

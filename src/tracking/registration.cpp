@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <opencv2/imgproc.hpp>
 #include <random>
 
 namespace semap {
@@ -236,15 +237,23 @@ cv::Mat downsample_depth(const cv::Mat& depth) {
 }  // namespace
 
 std::vector<DepthLevel> build_depth_pyramid(const cv::Mat& depth, const PinholeIntrinsics& intrinsics, int levels,
-                                            double min_depth, double max_depth, bool with_normals) {
+                                            double min_depth, double max_depth, bool with_normals,
+                                            const cv::Mat& gray) {
   std::vector<DepthLevel> pyramid;
   cv::Mat d = depth;
+  cv::Mat intensity;
+  if (!gray.empty()) {
+    gray.convertTo(intensity, CV_32F, 1.0 / 255.0);
+    if (intensity.size() != depth.size()) cv::resize(intensity, intensity, depth.size(), 0, 0, cv::INTER_AREA);
+    cv::GaussianBlur(intensity, intensity, cv::Size(5, 5), 1.0);
+  }
   PinholeIntrinsics k = intrinsics;
   k.width = depth.cols;
   k.height = depth.rows;
   for (int l = 0; l < levels; ++l) {
     if (l > 0) {
       d = downsample_depth(d);
+      if (!intensity.empty()) cv::resize(intensity, intensity, d.size(), 0, 0, cv::INTER_AREA);
       k = k.scaled(0.5);
       k.width = d.cols;
       k.height = d.rows;
@@ -253,6 +262,13 @@ std::vector<DepthLevel> build_depth_pyramid(const cv::Mat& depth, const PinholeI
     level.intrinsics = k;
     level.vertices = vertices_from_depth(d, k, min_depth, max_depth);
     if (with_normals) level.normals = normals_from_vertices(level.vertices);
+    if (!intensity.empty()) {
+      level.intensity = intensity.clone();
+      // Central differences (kernel [-0.5 0 0.5]): derivative per pixel.
+      const cv::Mat kx = (cv::Mat_<float>(1, 3) << -0.5f, 0.0f, 0.5f);
+      cv::filter2D(level.intensity, level.grad_x, CV_32F, kx, cv::Point(-1, -1), 0, cv::BORDER_REPLICATE);
+      cv::filter2D(level.intensity, level.grad_y, CV_32F, kx.t(), cv::Point(-1, -1), 0, cv::BORDER_REPLICATE);
+    }
     pyramid.push_back(std::move(level));
   }
   return pyramid;
@@ -269,15 +285,32 @@ Pose twist_exp(const Vector6d& xi) {
 
 namespace {
 struct Accumulator {
-  Matrix6d h = Matrix6d::Zero();
+  Matrix6d h = Matrix6d::Zero();  ///< geometric part
   Vector6d g = Vector6d::Zero();
-  double sq_sum = 0.0;  ///< unweighted squared residuals
+  Matrix6d h_photo = Matrix6d::Zero();  ///< photometric part (unscaled by its weight)
+  Vector6d g_photo = Vector6d::Zero();
+  double sq_sum = 0.0;  ///< unweighted squared point-to-plane residuals
   int matched = 0;
+  int photo_matched = 0;
   int valid = 0;
 };
 
+/// Bilinear sample of a CV_32FC1 image at (x, y); false outside the interpolation domain.
+inline bool bilinear(const cv::Mat& img, float x, float y, float& out) {
+  const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
+  if (x0 < 0 || y0 < 0 || x0 + 1 >= img.cols || y0 + 1 >= img.rows) return false;
+  const float ax = x - x0, ay = y - y0;
+  const float* r0 = img.ptr<float>(y0);
+  const float* r1 = img.ptr<float>(y0 + 1);
+  out = (1 - ay) * ((1 - ax) * r0[x0] + ax * r0[x0 + 1]) + ay * ((1 - ax) * r1[x0] + ax * r1[x0 + 1]);
+  return true;
+}
+
 Accumulator accumulate(const DepthLevel& src, const DepthLevel& tgt, const Pose& t, int stride, double max_dist,
-                       double min_normal_cos, double huber) {
+                       double min_normal_cos, double huber, const IcpParams& params) {
+  const bool photometric = params.photometric_weight > 0 && !src.intensity.empty() && !tgt.intensity.empty();
+  const float photo_max_dz = float(params.photometric_max_depth_difference);
+  const double photo_huber = params.photometric_huber;
   constexpr int kStripes = 8;  // fixed stripes: summation order (and result) independent of thread count
   std::vector<Accumulator> parts(kStripes);
   const Eigen::Matrix3f r = t.linear().cast<float>();
@@ -289,6 +322,7 @@ Accumulator accumulate(const DepthLevel& src, const DepthLevel& tgt, const Pose&
     for (int s = range.start; s < range.end; ++s) {
       Accumulator& acc = parts[s];
       Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
+      Eigen::Matrix<double, 6, 6> hp = Eigen::Matrix<double, 6, 6>::Zero();
       const int y_begin = rows * s / kStripes, y_end = rows * (s + 1) / kStripes;
       for (int y = y_begin; y < y_end; ++y) {
         if (y % stride) continue;
@@ -302,10 +336,31 @@ Accumulator accumulate(const DepthLevel& src, const DepthLevel& tgt, const Pose&
           ++acc.valid;
           const Eigen::Vector3f p = r * Eigen::Vector3f(v[0], v[1], v[2]) + tr;
           if (p.z() <= 0) continue;
-          const int u = int(std::lround(k.fx * p.x() / p.z() + k.cx));
-          const int w = int(std::lround(k.fy * p.y() / p.z() + k.cy));
+          const float uf = float(k.fx) * p.x() / p.z() + float(k.cx);
+          const float vf = float(k.fy) * p.y() / p.z() + float(k.cy);
+          const int u = int(std::lround(uf));
+          const int w = int(std::lround(vf));
           if (u < 0 || w < 0 || u >= tgt.vertices.cols || w >= tgt.vertices.rows) continue;
           const cv::Vec3f& qv = tgt.vertices.at<cv::Vec3f>(w, u);
+          if (photometric && !std::isnan(qv[2]) && std::abs(qv[2] - p.z()) < photo_max_dz) {
+            // Photometric residual r = I_t(pi(p)) - I_s(x); dr/dp = grad I_t * dpi/dp.
+            float it, gx, gy;
+            if (bilinear(tgt.intensity, uf, vf, it) && bilinear(tgt.grad_x, uf, vf, gx) &&
+                bilinear(tgt.grad_y, uf, vf, gy)) {
+              const double res = double(it) - double(src.intensity.at<float>(y, x));
+              const double iz = 1.0 / p.z();
+              const double dfx = gx * k.fx * iz, dfy = gy * k.fy * iz;
+              const Eigen::Vector3d gp(dfx, dfy, -(dfx * p.x() + dfy * p.y()) * iz);
+              Eigen::Matrix<double, 6, 1> j;
+              j.head<3>() = p.cast<double>().cross(gp);
+              j.tail<3>() = gp;
+              const double a = std::abs(res);
+              const double weight = a <= photo_huber ? 1.0 : photo_huber / a;
+              hp.selfadjointView<Eigen::Upper>().rankUpdate(j, weight);
+              acc.g_photo += weight * res * j;
+              ++acc.photo_matched;
+            }
+          }
           const cv::Vec3f& nv = tgt.normals.at<cv::Vec3f>(w, u);
           if (std::isnan(qv[2]) || std::isnan(nv[2])) continue;
           const Eigen::Vector3f q(qv[0], qv[1], qv[2]), n(nv[0], nv[1], nv[2]);
@@ -330,12 +385,16 @@ Accumulator accumulate(const DepthLevel& src, const DepthLevel& tgt, const Pose&
         }
       }
       acc.h = h.selfadjointView<Eigen::Upper>();
+      acc.h_photo = hp.selfadjointView<Eigen::Upper>();
     }
   });
   Accumulator total;
   for (const auto& p : parts) {
     total.h += p.h;
     total.g += p.g;
+    total.h_photo += p.h_photo;
+    total.g_photo += p.g_photo;
+    total.photo_matched += p.photo_matched;
     total.sq_sum += p.sq_sum;
     total.matched += p.matched;
     total.valid += p.valid;
@@ -358,15 +417,18 @@ IcpResult icp_point_to_plane(const std::vector<DepthLevel>& source, const std::v
     const int stride = std::max(1, params.stride >> l);
     const double max_dist = params.max_distance * std::pow(2.0, l);
     for (int it = 0; it < iterations; ++it) {
-      const Accumulator acc = accumulate(source[l], target[l], t, stride, max_dist, min_cos, params.huber_delta);
+      const Accumulator acc =
+          accumulate(source[l], target[l], t, stride, max_dist, min_cos, params.huber_delta, params);
       if (acc.matched < 30) {
         failed = true;
         break;
       }
+      // Joint cost: geometric + weighted photometric (both Huber-weighted Gauss-Newton).
+      Matrix6d h = acc.h + params.photometric_weight * acc.h_photo;
+      const Vector6d g = acc.g + params.photometric_weight * acc.g_photo;
       // Tiny damping keeps degenerate directions (planar scenes) from exploding.
-      Matrix6d h = acc.h;
       h.diagonal().array() += 1e-6 * h.diagonal().maxCoeff();
-      const Vector6d xi = h.ldlt().solve(-acc.g);
+      const Vector6d xi = h.ldlt().solve(-g);
       if (!xi.allFinite()) {
         failed = true;
         break;
@@ -380,8 +442,9 @@ IcpResult icp_point_to_plane(const std::vector<DepthLevel>& source, const std::v
   result.T_target_source = t;
   if (levels > 0) {
     const Accumulator final_acc = accumulate(source[0], target[0], t, params.stride, params.max_distance, min_cos,
-                                             params.huber_delta);
+                                             params.huber_delta, params);
     result.matched = final_acc.matched;
+    result.photometric_matched = final_acc.photo_matched;
     result.overlap = final_acc.valid ? double(final_acc.matched) / final_acc.valid : 0.0;
     result.rmse = final_acc.matched ? std::sqrt(final_acc.sq_sum / final_acc.matched) : 0.0;
     result.hessian = final_acc.h;

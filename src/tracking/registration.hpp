@@ -51,16 +51,23 @@ FrameFeatures extract_features(cv::ORB& orb, const cv::Mat& gray, const cv::Mat&
 std::vector<std::pair<int, int>> match_features(const FrameFeatures& query, const FrameFeatures& train,
                                                 double ratio, int max_hamming);
 
-/// One level of an RGB-D pyramid: vertex and normal maps in the camera frame.
+/// One level of an RGB-D pyramid: vertex and normal maps in the camera frame, and optionally
+/// the intensity image with its gradients (for the photometric term of the ICP).
 struct DepthLevel {
   PinholeIntrinsics intrinsics;
-  cv::Mat vertices;  ///< CV_32FC3, NaN where invalid
-  cv::Mat normals;   ///< CV_32FC3, NaN where invalid (only computed when requested)
+  cv::Mat vertices;   ///< CV_32FC3, NaN where invalid
+  cv::Mat normals;    ///< CV_32FC3, NaN where invalid (only computed when requested)
+  cv::Mat intensity;  ///< CV_32FC1 in [0, 1], empty unless a grey image was given
+  cv::Mat grad_x, grad_y;  ///< CV_32FC1 intensity derivatives per pixel (central differences)
 };
 /// Coarse-to-fine depth pyramid (level 0 = input). Depth outside [min, max] is invalid;
 /// downsampling averages the valid pixels of each 2x2 block that agree with its first valid one.
+/// With `gray` (CV_8UC1, the depth's size, registered) every level also gets the intensity,
+/// blurred lightly (Gaussian sigma 1 px, against motion blur and noise) and area-downsampled
+/// like the depth, with its gradients.
 std::vector<DepthLevel> build_depth_pyramid(const cv::Mat& depth, const PinholeIntrinsics& intrinsics, int levels,
-                                            double min_depth, double max_depth, bool with_normals);
+                                            double min_depth, double max_depth, bool with_normals,
+                                            const cv::Mat& gray = cv::Mat());
 
 struct IcpParams {
   std::vector<int> iterations = {4, 6, 10};  ///< per level, level 0 first
@@ -70,6 +77,13 @@ struct IcpParams {
   double huber_delta = 0.01;       ///< metres
   double convergence_update = 1e-5;
   double converged_update = 2e-3;  ///< last update above this = not converged
+  /// Photometric term (joint geometric + photometric ICP as in ElasticFusion / Open3D's hybrid
+  /// odometry): weight of the squared intensity residual relative to the squared point-to-plane
+  /// residual in metres, i.e. (sigma_geometric / sigma_intensity)^2. 0 = geometry only. Needs
+  /// intensity in both pyramids.
+  double photometric_weight = 0.0;
+  double photometric_huber = 0.1;   ///< Huber threshold of the intensity residual (intensity in [0, 1])
+  double photometric_max_depth_difference = 0.05;  ///< occlusion test against the target depth, metres
 };
 struct IcpResult {
   bool converged = false;
@@ -77,12 +91,16 @@ struct IcpResult {
   double rmse = 0.0;               ///< point-to-plane RMSE of the matched points at level 0, metres
   int matched = 0;                 ///< correspondences at level 0
   double overlap = 0.0;            ///< matched / valid source points at level 0
-  Matrix6d hessian = Matrix6d::Zero();  ///< J^T J at the result, order (rotation, translation), left perturbation in the target frame
+  int photometric_matched = 0;      ///< intensity residuals at level 0 (0 without the term)
+  Matrix6d hessian = Matrix6d::Zero();  ///< geometric J^T J at the result, order (rotation, translation), left perturbation in the target frame
   int iterations_run = 0;
 };
 /// Point-to-plane ICP (METHODS.md A2 step 4): source vertices are transformed by the current
 /// estimate, projected into the target image (projective association), matched to the target
 /// vertex/normal there; Gauss-Newton with Huber weights, coarse to fine. Row-parallel.
+/// With params.photometric_weight > 0 each projected point also contributes the intensity
+/// residual I_target(pi(T p)) - I_source(p) (bilinear, gradient Jacobian): the texture then
+/// constrains motions the geometry leaves weak (sliding along planes).
 IcpResult icp_point_to_plane(const std::vector<DepthLevel>& source, const std::vector<DepthLevel>& target,
                              const Pose& initial_T_target_source, const IcpParams& params);
 

@@ -43,6 +43,7 @@ struct Keyframe {
   size_t frame_index = 0;
   double timestamp = 0.0;
   cv::Mat depth;           ///< repaired depth, metres (pyramids are rebuilt from it on demand)
+  cv::Mat gray;            ///< grey image (CV_8UC1) for the photometric ICP term
   FrameFeatures features;
   FernCode code;
   int parent = -1;         ///< keyframe it was tracked from
@@ -114,6 +115,9 @@ struct Tracker::Impl {
     icp_params.huber_delta = cfg.icp_huber_delta;
     icp_params.convergence_update = cfg.icp_convergence_update;
     icp_params.converged_update = cfg.icp_converged_update;
+    icp_params.photometric_weight = cfg.icp_photometric_weight;
+    icp_params.photometric_huber = cfg.icp_photometric_huber;
+    icp_params.photometric_max_depth_difference = cfg.icp_photometric_max_depth_difference;
     if (cfg.background_loop_closure) worker = std::thread([this] { worker_loop(); });
   }
 
@@ -140,8 +144,9 @@ struct Tracker::Impl {
     if (worker.joinable()) worker.join();
   }
 
-  std::vector<DepthLevel> pyramid(const cv::Mat& depth) const {
-    return build_depth_pyramid(depth, intr, cfg.icp_levels, cfg.min_depth, cfg.max_depth, true);
+  std::vector<DepthLevel> pyramid(const cv::Mat& depth, const cv::Mat& gray) const {
+    return build_depth_pyramid(depth, intr, cfg.icp_levels, cfg.min_depth, cfg.max_depth, true,
+                               cfg.icp_photometric_weight > 0 ? gray : cv::Mat());
   }
 
   bool icp_acceptable(const IcpResult& icp, double max_rmse, double min_overlap) const {
@@ -256,10 +261,10 @@ struct Tracker::Impl {
                      [](const auto& a, const auto& b) { return a.first > b.first; });
     if (int(candidates.size()) > cfg.loop_candidates) candidates.resize(cfg.loop_candidates);
     if (candidates.empty()) return;
-    const auto kf_pyramid = pyramid(kf->depth);
+    const auto kf_pyramid = pyramid(kf->depth, kf->gray);
     bool added = false;
     for (const auto& [sim, other] : candidates) {
-      const auto other_pyramid = pyramid(other->depth);
+      const auto other_pyramid = pyramid(other->depth, other->gray);
       Registration reg = register_to(kf->features, kf_pyramid, other->features, other_pyramid, nullptr,
                                      uint32_t(cfg.seed) + uint32_t(id) * 7919u);
       if (!reg.ok || reg.icp.rmse > cfg.loop_max_icp_rmse || reg.icp.overlap < cfg.loop_min_overlap) continue;
@@ -326,12 +331,12 @@ struct Tracker::Impl {
 
     t0 = Clock::now();
     FrameFeatures features = extract_features(*orb, gray, depth, intr, cfg.min_depth, cfg.max_depth);
-    std::vector<DepthLevel> frame_pyramid = pyramid(depth);
+    std::vector<DepthLevel> frame_pyramid = pyramid(depth, gray);
     result.timings.features_ms = ms_since(t0);
 
     if (reference < 0) {  // first frame: world = its camera
       t0 = Clock::now();
-      make_keyframe(frame, depth, std::move(features), ferns.encode(rgb, depth), std::move(frame_pyramid), -1,
+      make_keyframe(frame, depth, gray, std::move(features), ferns.encode(rgb, depth), std::move(frame_pyramid), -1,
                     Pose::Identity(), IcpResult{});
       result.is_keyframe = true;
       result.reference_keyframe = reference;
@@ -444,7 +449,7 @@ struct Tracker::Impl {
         T_world_frame = kf_pose.at(reference) * T_ref_frame;
       }
       if (!(cfg.keyframe_reuse && reuse_keyframe(features, frame_pyramid, T_world_frame, reg, T_ref_frame))) {
-        make_keyframe(frame, depth, std::move(features), std::move(code), std::move(frame_pyramid), reference,
+        make_keyframe(frame, depth, gray, std::move(features), std::move(code), std::move(frame_pyramid), reference,
                       T_ref_frame, reg.icp);
         result.is_keyframe = true;
         T_ref_frame = Pose::Identity();
@@ -470,13 +475,14 @@ struct Tracker::Impl {
     return result;
   }
 
-  void make_keyframe(const Frame& frame, const cv::Mat& depth, FrameFeatures features, FernCode code,
+  void make_keyframe(const Frame& frame, const cv::Mat& depth, const cv::Mat& gray, FrameFeatures features, FernCode code,
                      std::vector<DepthLevel> frame_pyramid, int parent, const Pose& T_parent_this,
                      const IcpResult& icp) {
     auto kf = std::make_shared<Keyframe>();
     kf->frame_index = frame.index;
     kf->timestamp = frame.timestamp;
     kf->depth = depth.clone();
+    kf->gray = gray.clone();
     kf->features = std::move(features);
     kf->code = std::move(code);
     kf->parent = parent;
@@ -529,7 +535,7 @@ struct Tracker::Impl {
       if (best >= 0) best_kf = keyframes[best];
     }
     if (best < 0) return false;
-    const auto kf_pyramid = pyramid(best_kf->depth);
+    const auto kf_pyramid = pyramid(best_kf->depth, best_kf->gray);
     const Pose guess = best_pose.inverse() * T_world_frame;
     const IcpResult icp = icp_point_to_plane(frame_pyramid, kf_pyramid, guess, icp_params);
     if (!icp_acceptable(icp, cfg.loss_max_icp_rmse, cfg.keyframe_min_overlap)) return false;
@@ -568,7 +574,7 @@ struct Tracker::Impl {
                      [](const auto& a, const auto& b) { return a.first > b.first; });
     if (int(candidates.size()) > cfg.relocalisation_candidates) candidates.resize(cfg.relocalisation_candidates);
     for (const auto& [sim, kf] : candidates) {
-      auto kf_pyramid = kf->id == reference ? ref_pyramid : pyramid(kf->depth);
+      auto kf_pyramid = kf->id == reference ? ref_pyramid : pyramid(kf->depth, kf->gray);
       Registration reg = register_to(features, frame_pyramid, kf->features, kf_pyramid, nullptr,
                                      uint32_t(cfg.seed) + 104729u * uint32_t(kf->id + 1));
       // Without a prior only a clear registration counts (repetitive texture fools RANSAC).

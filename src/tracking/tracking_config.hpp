@@ -38,6 +38,9 @@ struct TrackingConfig {
   double icp_huber_delta = 0.01;       ///< Huber threshold of the point-to-plane residual, metres
   double icp_convergence_update = 1e-5;  ///< stop a level when |update| falls below, (rad, m)
   double icp_converged_update = 2e-3;  ///< last update above this = ICP not converged (tracking loss), (rad, m)
+  double icp_photometric_weight = 0.3;  ///< weight of the intensity residual against the point-to-plane one, m^2 (0 = geometry only): (sigma_geo / sigma_I)^2 with sigma_geo ~ 1 cm, sigma_I ~ 5 grey levels
+  double icp_photometric_huber = 0.1;   ///< Huber threshold of the intensity residual (intensity 0..1)
+  double icp_photometric_max_depth_difference = 0.05;  ///< occlusion test of the photometric term, metres
 
   // --- tracking loss (A2) ---
   double loss_max_icp_rmse = 0.03;     ///< ICP residual RMSE above this = lost, metres
@@ -101,6 +104,9 @@ struct TrackingConfig {
     v.param("icp_huber_delta", icp_huber_delta, "m", "Huber threshold on point-to-plane residuals");
     v.param("icp_convergence_update", icp_convergence_update, "rad|m", "update norm that ends a level");
     v.param("icp_converged_update", icp_converged_update, "rad|m", "final update above this = ICP not converged");
+    v.param("icp_photometric_weight", icp_photometric_weight, "m^2", "joint ICP: weight of intensity residuals vs point-to-plane residuals (0 = off)");
+    v.param("icp_photometric_huber", icp_photometric_huber, "", "Huber threshold of intensity residuals (0..1)");
+    v.param("icp_photometric_max_depth_difference", icp_photometric_max_depth_difference, "m", "photometric residuals need the target depth this close");
     v.param("loss_max_icp_rmse", loss_max_icp_rmse, "m", "ICP RMSE above this means tracking is lost");
     v.param("loss_min_overlap", loss_min_overlap, "", "matched fraction below this means lost");
     v.param("loss_max_translation_jump", loss_max_translation_jump, "m", "implausible jump from the motion prior");
@@ -148,6 +154,9 @@ struct TrackingConfig {
     require_param(icp_max_distance > 0, "tracking.icp_max_distance", "must be > 0");
     require_param(icp_max_normal_angle_deg > 0 && icp_max_normal_angle_deg <= 90, "tracking.icp_max_normal_angle_deg", "must be in (0, 90]");
     require_param(icp_huber_delta > 0, "tracking.icp_huber_delta", "must be > 0");
+    require_param(icp_photometric_weight >= 0, "tracking.icp_photometric_weight", "must be >= 0");
+    require_param(icp_photometric_huber > 0, "tracking.icp_photometric_huber", "must be > 0");
+    require_param(icp_photometric_max_depth_difference > 0, "tracking.icp_photometric_max_depth_difference", "must be > 0");
     require_param(loss_max_icp_rmse > 0, "tracking.loss_max_icp_rmse", "must be > 0");
     require_param(loss_min_overlap >= 0 && loss_min_overlap < 1, "tracking.loss_min_overlap", "must be in [0, 1)");
     require_param(keyframe_translation > 0 && keyframe_rotation_deg > 0, "tracking.keyframe_translation", "keyframe thresholds must be > 0");
