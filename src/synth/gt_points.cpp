@@ -19,6 +19,7 @@ struct Sampler {
   void add(int primitive, int room_face, const Eigen::Vector3d& p, const Eigen::Vector3d& n, ClassId label,
            uint16_t instance) {
     cloud.points.push_back(p.cast<float>());
+    cloud.normals.push_back(n.cast<float>());
     cloud.colours.push_back(surface_colour(scene, primitive, room_face, p, n));
     cloud.labels.push_back(label);
     cloud.instances.push_back(instance);
@@ -121,11 +122,15 @@ void mark_observed_points(const PointCloud& cloud, const cv::Mat& depth, const P
   const Eigen::Matrix3f R = T_cw.block<3, 3>(0, 0);
   const Eigen::Vector3f t = T_cw.block<3, 1>(0, 3);
   const float fx = K.fx, fy = K.fy, cx = K.cx, cy = K.cy, tol = tolerance;
+  const bool with_normals = cloud.has_normals();
   tbb::parallel_for(tbb::blocked_range<size_t>(0, cloud.size(), 16384), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i < r.end(); ++i) {
       if (observed[i]) continue;
       const Eigen::Vector3f pc = R * cloud.points[i] + t;
       if (pc.z() < 0.05f) continue;
+      // A face pointing away from the camera is never seen, however close it lies behind the
+      // visible one (the back of a 1.5 cm panel, a shelf's underside behind its front edge).
+      if (with_normals && (R * cloud.normals[i]).dot(pc) >= 0.f) continue;
       const int u = static_cast<int>(std::lround(fx * pc.x() / pc.z() + cx));
       const int v = static_cast<int>(std::lround(fy * pc.y() / pc.z() + cy));
       if (u < 0 || v < 0 || u >= depth.cols || v >= depth.rows) continue;

@@ -14,12 +14,13 @@
 
 namespace semap {
 
-/// Points about `spacing` apart on all primitive and room surfaces, with shaded colour (as
-/// rendered), class label and instance id (0 = stuff). Hidden faces (e.g. undersides resting
+/// Points about `spacing` apart on all primitive and room surfaces, with outward normal, shaded
+/// colour (as rendered), class label and instance id (0 = stuff). Hidden faces (e.g. undersides resting
 /// on the floor) are included; the visibility filter removes them.
 PointCloud sample_scene_surface(const SyntheticScene& scene, double spacing = 0.01);
 
-/// Sets observed[i] = 1 for points seen in this frame (clean depth within `tolerance`).
+/// Sets observed[i] = 1 for points seen in this frame: clean depth within `tolerance` and, when
+/// the cloud has normals, the surface facing the camera.
 void mark_observed_points(const PointCloud& cloud, const cv::Mat& depth_m, const Pose& T_world_camera,
                           const PinholeIntrinsics& intrinsics, double tolerance, std::vector<uint8_t>& observed);
 

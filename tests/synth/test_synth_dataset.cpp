@@ -82,7 +82,7 @@ TEST(SynthDataset, WritesCompleteLayoutWithConsistentLabelsAndGtPoints) {
   const TriangleMesh gt = read_ply(d / "gt_points.ply");
   const PointCloud& pts = gt.vertices;
   ASSERT_GT(pts.size(), 100000u);
-  ASSERT_TRUE(pts.has_labels() && pts.has_instances() && pts.has_colours());
+  ASSERT_TRUE(pts.has_labels() && pts.has_instances() && pts.has_colours() && pts.has_normals());
   const Trajectory traj = read_tum_trajectory(d / "groundtruth.txt");
   ASSERT_EQ(traj.size(), 40u);
   const PinholeIntrinsics K = reader->camera().depth;
@@ -100,6 +100,7 @@ TEST(SynthDataset, WritesCompleteLayoutWithConsistentLabelsAndGtPoints) {
       if (u < 0 || v < 0 || u >= K.width || v >= K.height) continue;
       const float z = f.depth.at<float>(v, u);
       if (!(z > 0) || std::abs(z - pc.z()) > 0.015f) continue;
+      if ((T_cw.linear() * pts.normals[k]).dot(pc) >= 0.f) continue;  // faces away from this camera
       seen[k] = 1;
       ++visible;
       label_ok += f.labels.at<uint8_t>(v, u) == pts.labels[k];
@@ -108,7 +109,7 @@ TEST(SynthDataset, WritesCompleteLayoutWithConsistentLabelsAndGtPoints) {
   }
   for (size_t k = 0; k < pts.size(); ++k) instances_in_points.insert(pts.instances[k]);
   const double seen_fraction = std::accumulate(seen.begin(), seen.end(), 0.0) / pts.size();
-  EXPECT_GT(seen_fraction, 0.995) << "gt_points.ply keeps only observed points";
+  EXPECT_GT(seen_fraction, 0.995) << "gt_points.ply keeps only observed, camera-facing points";
   EXPECT_GT(static_cast<double>(label_ok) / visible, 0.99);
   EXPECT_GT(static_cast<double>(instance_ok) / visible, 0.99);
   EXPECT_EQ(instances_in_points.size(), 13u) << "stuff + 12 objects all observed";
