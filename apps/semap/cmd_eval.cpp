@@ -39,6 +39,8 @@ int run_ate(const EvalOptions& o) {
   require_file(o.est, "--est");
   const Trajectory gt = read_tum_trajectory(o.gt);
   const Trajectory est = read_tum_trajectory(o.est);
+  if (gt.empty()) throw Error(o.gt, "trajectory has no poses");
+  if (est.empty()) throw Error(o.est, "trajectory has no poses");
   const AteResult ate = compute_ate(gt, est, o.max_dt);
   const RpeResult rpe = compute_rpe(gt, est, o.delta_s, o.max_dt);
   if (o.json) {
