@@ -23,6 +23,7 @@ struct FrameSetup {
   Eigen::Matrix3f R_cw;
   Eigen::Vector3f t_cw;
   float s, delta, eps, label_band, min_range, max_range, default_confidence;
+  int confusion_classes = kNumRealClasses - 1;
   bool labels = false, confidence = false, probabilities = false, colour = false;
   int prob_channels = 0;
 };
@@ -57,6 +58,7 @@ FrameSetup setup_frame(const TsdfMap& map, const IntegrationInput& in) {
   f.min_range = static_cast<float>(cfg.min_range);
   f.max_range = static_cast<float>(cfg.max_range);
   f.default_confidence = static_cast<float>(cfg.bayes_default_confidence);
+  f.confusion_classes = cfg.bayes_confusion_classes;
   f.labels = check(in.labels, CV_8UC1, "labels");
   f.confidence = check(in.confidence, CV_32FC1, "confidence");
   f.colour = check(in.colour, CV_8UC3, "colour");
@@ -326,7 +328,7 @@ class GroupedIntegrator final : public ArenaIntegrator {
                       static_cast<uint8_t>(std::lround(best->rgb_sum[2] / best->weight))};
       if (want_observation && g.label != 0 && !f.probabilities) {
         const float c = f.confidence ? std::clamp(best->confidence_sum / best->weight, 0.01f, 0.999f) : f.default_confidence;
-        g.observation = ClassDistribution::from_label(g.label, c);
+        g.observation = ClassDistribution::from_label(g.label, c, f.confusion_classes);
       }
     }
     if (want_observation && f.probabilities) group_probabilities(in, f, map.bayes().k());
@@ -547,7 +549,7 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
                 obs = &pixel_observations_[pix];
               } else {
                 const float c = f.confidence ? std::clamp(in.confidence.ptr<float>(v)[u], 0.01f, 0.999f) : f.default_confidence;
-                observation = ClassDistribution::from_label(label, c);
+                observation = ClassDistribution::from_label(label, c, f.confusion_classes);
                 obs = &observation;
               }
             }

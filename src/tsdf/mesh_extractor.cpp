@@ -5,6 +5,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <cmath>
 
 #include "tsdf/mc_tables.hpp"
 
@@ -45,6 +46,13 @@ MeshExtractor::BlockMesh MeshExtractor::mesh_block(const TsdfMap& map, const Blo
   const int bayes_stride = map.bayes().bytes_per_voxel();
   const int min_votes = map.config().mesh_min_label_votes;
   const uint8_t max_bayes_q = map.bayes().encode(static_cast<float>(map.config().mesh_min_label_probability));
+  // Evidence rule (METHODS A6): the argmax must lead the runner-up by N frames' votes. The odds
+  // of a lead of k frames are r^k; the threshold r^(N - 1/2) lies midway (in log) between N - 1
+  // and N, so the quantised probabilities cannot tip it. Capped at the odds the floor can hold.
+  const int min_frames = map.config().mesh_min_label_frames;
+  const float min_odds = min_frames == 0 ? 0.0f
+                                         : static_cast<float>(std::min(std::pow(map.config().bayes_frame_odds(), min_frames - 0.5),
+                                                                       0.9 * map.bayes().max_odds()));
   // Gather the 9^3 neighbourhood (this block plus the first layer of its +x/+y/+z neighbours).
   std::array<Sample, kN * kN * kN> samples;
   const Block* neighbours[2][2][2];
@@ -66,7 +74,7 @@ MeshExtractor::BlockMesh MeshExtractor::mesh_block(const TsdfMap& map, const Blo
         // Labels with too little evidence (e.g. seen in one frame) are shown as unlabelled.
         if (use_bayes) {
           const uint8_t* bayes = &b->bayes[static_cast<size_t>(li) * bayes_stride];
-          s.label = bayes[1] <= max_bayes_q ? BayesLayerCodec::argmax(bayes) : 0;
+          s.label = bayes[1] <= max_bayes_q && map.bayes().top_odds(bayes) >= min_odds ? BayesLayerCodec::argmax(bayes) : 0;
         } else {
           s.label = (b->label_confidence && b->label_confidence[li] >= min_votes) ? v.label : 0;
         }
@@ -106,7 +114,10 @@ MeshExtractor::BlockMesh MeshExtractor::mesh_block(const TsdfMap& map, const Blo
             const float t = a.sdf / (a.sdf - b.sdf);
             Eigen::Vector3f p = ((base + lo).cast<float>().array() + 0.5f) * s;
             p[axis] += t * s;
-            const Sample& nearest = std::fabs(a.sdf) <= std::fabs(b.sdf) ? a : b;
+            // Label of the edge's corner nearest to the surface; when that one has too little
+            // evidence to show a label, the other corner of the same edge (same surface patch).
+            const bool a_nearer = std::fabs(a.sdf) <= std::fabs(b.sdf);
+            const Sample& nearest = (a_nearer ? a : b).label != 0 ? (a_nearer ? a : b) : (a_nearer ? b : a);
             slot = static_cast<int32_t>(mesh.positions.size());
             mesh.positions.push_back(p);
             mesh.edge_keys.push_back(edge_key(base + lo, axis));

@@ -1,4 +1,5 @@
 #pragma once
+#include <algorithm>
 #include <string>
 
 #include "core/params.hpp"
@@ -27,7 +28,8 @@ struct TsdfConfig {
   bool bayes_layer = false;      ///< Bayesian top-k class probabilities per voxel (A6)
   int bayes_top_k = 4;           ///< k classes kept per voxel (2 bytes each)
   double bayes_default_confidence = 0.7;  ///< P(label) when only labels are given
-  double bayes_min_probability = 1e-3;    ///< floor of a class probability (keeps Bayes non-absorbing)
+  int bayes_confusion_classes = 4;        ///< m: a wrong label is one of ~m confusable classes (A6 likelihood)
+  double bayes_min_probability = 1e-5;    ///< floor of a class probability (keeps Bayes non-absorbing)
   double label_band_voxels = 2.0;  ///< labels update only voxels with |d| <= this * s
 
   // Colour.
@@ -38,10 +40,16 @@ struct TsdfConfig {
   double mesh_min_weight = 0.0;       ///< cube corners need a weight above this to be meshed
   int mesh_min_label_votes = 2;       ///< compact label shown only with this vote margin (else 0)
   double mesh_min_label_probability = 0.9;  ///< Bayesian argmax shown only above this (else 0)
+  int mesh_min_label_frames = 3;  ///< Bayesian argmax shown only when it leads the runner-up by this many frames' votes
 
   // Memory for long runs.
   double drop_distance = 0.0;  ///< blocks farther than this from the camera are freed, m (0 = keep all)
 
+  /// Odds one label-only frame adds to its label against any other class (METHODS A6 likelihood
+  /// of ClassDistribution::from_label): r = c m / (1 - c), at least 1.
+  double bayes_frame_odds() const {
+    return std::max(1.0, bayes_default_confidence * bayes_confusion_classes / (1.0 - bayes_default_confidence));
+  }
   double truncation() const { return truncation_voxels * voxel_size; }
   double epsilon() const { return epsilon_voxels * voxel_size; }
 
@@ -61,6 +69,9 @@ struct TsdfConfig {
     v.param("bayes_layer", bayes_layer, "", "keep per-voxel top-k class probabilities (METHODS A6)");
     v.param("bayes_top_k", bayes_top_k, "classes", "classes kept per voxel by the Bayesian layer");
     v.param("bayes_default_confidence", bayes_default_confidence, "", "P(observed label) when no confidence/probabilities are given");
+    v.param("bayes_confusion_classes", bayes_confusion_classes, "classes",
+            "label-only likelihood: a wrong label falls on one of this many confusable classes, so one frame "
+            "multiplies a label's odds by c*m/(1-c) (37 = errors spread over every class)");
     v.param("bayes_min_probability", bayes_min_probability, "", "floor of any class probability in the Bayesian layer");
     v.param("label_band_voxels", label_band_voxels, "voxels", "labels update voxels with |sdf| <= this * s");
     v.param("colour_layer", colour_layer, "", "keep an RGB colour per voxel");
@@ -70,6 +81,9 @@ struct TsdfConfig {
             "a vertex shows the compact label only when its vote margin reaches this (else unlabelled)");
     v.param("mesh_min_label_probability", mesh_min_label_probability, "",
             "a vertex shows the Bayesian argmax only when its probability reaches this (else unlabelled)");
+    v.param("mesh_min_label_frames", mesh_min_label_frames, "frames",
+            "a vertex shows the Bayesian argmax only when its odds against the runner-up reach r^this, "
+            "r = c*m/(1-c) the odds one label-only frame adds (c, m: bayes_default_confidence, bayes_confusion_classes)");
     v.param("drop_distance", drop_distance, "m", "free blocks farther than this from the camera (0 = never)");
   }
   void validate() const {
@@ -88,6 +102,8 @@ struct TsdfConfig {
     require_param(bayes_top_k >= 1 && bayes_top_k <= 8, "tsdf.bayes_top_k", "must be in [1, 8]");
     require_param(bayes_default_confidence > 0 && bayes_default_confidence < 1, "tsdf.bayes_default_confidence",
                   "must be in (0, 1)");
+    require_param(bayes_confusion_classes >= 1 && bayes_confusion_classes <= 37, "tsdf.bayes_confusion_classes",
+                  "must be in [1, 37]");
     require_param(bayes_min_probability > 0 && bayes_min_probability < 0.1, "tsdf.bayes_min_probability",
                   "must be in (0, 0.1)");
     require_param(label_band_voxels > 0, "tsdf.label_band_voxels", "must be > 0");
@@ -97,6 +113,8 @@ struct TsdfConfig {
                   "must be in [0, 255]");
     require_param(mesh_min_label_probability >= 0 && mesh_min_label_probability < 1,
                   "tsdf.mesh_min_label_probability", "must be in [0, 1)");
+    require_param(mesh_min_label_frames >= 0 && mesh_min_label_frames <= 16, "tsdf.mesh_min_label_frames",
+                  "must be in [0, 16]");
     require_param(drop_distance >= 0, "tsdf.drop_distance", "must be >= 0");
   }
 };

@@ -2,12 +2,14 @@
 
 namespace semap {
 
-ClassDistribution ClassDistribution::from_label(ClassId label, float confidence) {
+ClassDistribution ClassDistribution::from_label(ClassId label, float confidence, int confusion_classes) {
   ClassDistribution d;
   d.count = 1;
   d.classes[0] = label;
   d.probabilities[0] = confidence;
-  d.rest_each = (1.0f - confidence) / static_cast<float>(kNumRealClasses - 1);
+  // A likelihood over the true class (not normalised): the Bayes update normalises the posterior.
+  // Capped at c: an observation never argues against its own label (r >= 1).
+  d.rest_each = std::min(confidence, (1.0f - confidence) / static_cast<float>(std::clamp(confusion_classes, 1, kNumRealClasses - 1)));
   return d;
 }
 

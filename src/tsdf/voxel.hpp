@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 
 #include "core/labels.hpp"
 
@@ -104,8 +105,12 @@ struct ClassDistribution {
   std::array<float, kMaxTopK> probabilities{};
   float rest_each = 1.0f / kNumRealClasses;  ///< probability of every class not listed
 
-  /// A label with confidence c: P(label) = c, the remaining 1 - c spread evenly over the others.
-  static ClassDistribution from_label(ClassId label, float confidence);
+  /// Likelihood of observing `label` with confidence c (METHODS A6 with a label-only segmenter):
+  /// c if the true class is `label`, (1 - c) / m for every other true class. m = the number of
+  /// classes a segmenter's errors spread over (its confusable classes); m = kNumRealClasses - 1
+  /// is the uniform-error model. One observation multiplies the odds of `label` against any other
+  /// class by r = c m / (1 - c): m small = errors concentrated = one frame is weak evidence.
+  static ClassDistribution from_label(ClassId label, float confidence, int confusion_classes = kNumRealClasses - 1);
   /// The k most probable classes of a full per-class vector (index = class id, index 0 ignored).
   static ClassDistribution from_probabilities(const float* probs, int num_channels, int k);
 };
@@ -132,6 +137,18 @@ class BayesLayerCodec {
   void update(uint8_t* voxel, const ClassDistribution& observation) const;
   /// Most probable class of a voxel (0 when never labelled).
   static ClassId argmax(const uint8_t* voxel) { return voxel[0]; }
+  /// Posterior odds of the most probable class against the runner-up (a listed class or, when
+  /// none is listed, any unlisted one); 0 when never labelled. With the label-only likelihood
+  /// (ClassDistribution::from_label) every frame's vote multiplies these odds by r = c m/(1-c).
+  float top_odds(const uint8_t* voxel) const {
+    if (voxel[0] == 0) return 0.0f;
+    const ClassDistribution d = read(voxel);
+    const float second = d.count > 1 ? std::max(d.probabilities[1], d.rest_each) : d.rest_each;
+    return second > 0 ? d.probabilities[0] / second : std::numeric_limits<float>::infinity();
+  }
+  /// Largest odds the floor lets a voxel reach (every other class at min_probability).
+  double max_odds() const { return (1.0 - (kNumRealClasses - 1) * min_p_) / min_p_; }
+  double min_probability() const { return min_p_; }
 
  private:
   int k_;

@@ -2,6 +2,7 @@
 // B5 grouping, the compact label vote and the A6 Bayesian update, the block hash table.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 #include <unordered_map>
 
@@ -128,6 +129,50 @@ TEST(BayesLayer, TwoObservationsMultiplyAndRenormalise) {
   double sum = 0;
   for (int i = 0; i < d.count; ++i) sum += d.probabilities[i];
   EXPECT_LE(sum, 1.03);
+}
+
+TEST(BayesLayer, EvidenceRuleCountsFramesNotSaturatedProbabilities) {
+  // Defaults: c = 0.7, m = 4 confusable classes -> one label-only frame multiplies the odds of its
+  // label by r = 0.7 * 4 / 0.3 = 9.33; the mesh shows the argmax at a lead of three frames
+  // (odds >= r^2.5, midway between two and three frames' odds).
+  const TsdfConfig cfg;
+  const BayesLayerCodec codec(cfg.bayes_top_k, cfg.bayes_min_probability);
+  const double r = cfg.bayes_frame_odds();
+  EXPECT_NEAR(r, 0.7 * 4 / 0.3, 1e-9);
+  const double needed = std::pow(r, cfg.mesh_min_label_frames - 0.5);
+  ASSERT_LT(needed, 0.9 * codec.max_odds());  // the floor can represent the rule's odds
+  auto observe = [&](std::vector<uint8_t>& voxel, Label l) {
+    codec.update(voxel.data(), ClassDistribution::from_label(id(l), static_cast<float>(cfg.bayes_default_confidence),
+                                                             cfg.bayes_confusion_classes));
+  };
+  auto fresh = [&] {
+    std::vector<uint8_t> v(static_cast<size_t>(codec.bytes_per_voxel()), 0);
+    for (int i = 0; i < codec.k(); ++i) v[2 * i + 1] = 255;
+    return v;
+  };
+  auto shown = [&](const std::vector<uint8_t>& v) { return codec.top_odds(v.data()) >= needed; };
+  // Odds grow by r per agreeing frame (quantisation: 3 % per stored probability).
+  std::vector<uint8_t> voxel = fresh();
+  observe(voxel, Label::kWall);
+  EXPECT_NEAR(codec.top_odds(voxel.data()), r, r * 0.06);
+  observe(voxel, Label::kWall);
+  EXPECT_NEAR(codec.top_odds(voxel.data()), r * r, r * r * 0.06);
+  EXPECT_FALSE(shown(voxel));  // two frames: not enough
+  observe(voxel, Label::kWall);
+  EXPECT_TRUE(shown(voxel));
+  // The stray-class pattern of 20 % region flicker on a rarely seen patch: 4 x ceiling, 2 x wall,
+  // 2 x floor. Ceiling is the argmax (and above 0.9), but leads by only two frames: not shown.
+  voxel = fresh();
+  for (Label l : {Label::kCeiling, Label::kWall, Label::kCeiling, Label::kFloor, Label::kCeiling, Label::kWall,
+                  Label::kFloor, Label::kCeiling})
+    observe(voxel, l);
+  EXPECT_EQ(BayesLayerCodec::argmax(voxel.data()), id(Label::kCeiling));
+  EXPECT_FALSE(shown(voxel));
+  // A well-seen wall keeps its evidence through the same flicker: 20 frames, 4 of them ceiling.
+  voxel = fresh();
+  for (int i = 0; i < 20; ++i) observe(voxel, i % 5 == 2 ? Label::kCeiling : Label::kWall);
+  EXPECT_EQ(BayesLayerCodec::argmax(voxel.data()), id(Label::kWall));
+  EXPECT_TRUE(shown(voxel));
 }
 
 TEST(BayesLayer, TopKKeepsTheMostProbable) {

@@ -3,6 +3,7 @@
 // SEMAP_TSDF_HEAVY builds the longer variants (more frames, 640x480).
 #include <gtest/gtest.h>
 
+#include <array>
 #include <chrono>
 #include <map>
 
@@ -94,11 +95,26 @@ TEST_P(SyntheticQuality, GroundTruthLabelsMeetTheIssueFigures) {
   EXPECT_GE(e.miou, 0.95);
 }
 
+/// Mesh vertices labelled with a class the ground truth never has (the eval counts such a class
+/// with IoU 0): what 20 % region flicker leaves on rarely seen patches without an evidence rule.
+size_t stray_class_vertices(const TriangleMesh& mesh) {
+  const TriangleMesh gt = read_ply(synthetic_dataset() / "gt_points.ply");
+  std::array<bool, kNumClasses> in_gt{};
+  for (ClassId c : gt.vertices.labels) in_gt[c] = true;
+  size_t n = 0;
+  for (ClassId c : mesh.vertices.labels) n += c != 0 && !in_gt[c];
+  return n;
+}
+
 TEST_P(SyntheticQuality, NoisyLabelsBayesianLayerAndCompactRule) {
 #ifndef SEMAP_TSDF_HEAVY
-  // Measured (90 frames, 320x240, seed 3): grouped Bayes 0.934 / vote 0.906.
   if (GetParam() != "grouped") GTEST_SKIP() << "projective noisy case: heavy suite only";
 #endif
+  // 20 % per-frame region flicker (the synth generator's label_noisy/). The Bayesian layer shows
+  // its argmax only when it leads the runner-up by three frames' votes (mesh_min_label_frames):
+  // a patch seen in a few frames, some of which flickered together (a whole wall turns
+  // "ceiling" in a frame), otherwise shows a class the scene does not have, which the eval
+  // counts with IoU 0. The compact vote shows a margin of 2 (mesh_min_label_votes).
   TsdfConfig cfg;
   cfg.voxel_size = 0.02;
   cfg.integrator = GetParam();
@@ -106,16 +122,13 @@ TEST_P(SyntheticQuality, NoisyLabelsBayesianLayerAndCompactRule) {
   const FuseResult bayes = fuse_dataset(synthetic_dataset(), cfg, true, kFrames);
   const SemanticEvaluation eb = evaluate(bayes.mesh);
   print(GetParam() + " noisy labels, Bayesian layer", eb, bayes.ms_per_frame);
-  cfg.bayes_layer = false;  // compact weighted-majority vote
+  std::cout << "  stray-class vertices: " << stray_class_vertices(bayes.mesh) << "\n";
+  cfg.bayes_layer = false;  // compact majority vote
   const FuseResult compact = fuse_dataset(synthetic_dataset(), cfg, true, kFrames);
   const SemanticEvaluation ec = evaluate(compact.mesh);
   print(GetParam() + " noisy labels, compact vote", ec, compact.ms_per_frame);
-#ifdef SEMAP_TSDF_HEAVY
+  std::cout << "  stray-class vertices: " << stray_class_vertices(compact.mesh) << "\n";
   EXPECT_GE(eb.miou, 0.90);  // issue 3 figure
-#else
-  // Measured 0.934 (cup 0.84, bottle 0.80: small objects seen in few frames).
-  EXPECT_GE(eb.miou, 0.90);  // issue 3 figure
-#endif
   EXPECT_GE(ec.miou, 0.80);
 }
 

@@ -190,7 +190,7 @@ TEST(MapIo, SaveLoadIsExactAndCorruptionIsAnError) {
 }
 
 TEST(MeshPly, WrittenMeshCarriesColoursAndLabels) {
-  SemanticTsdf tsdf = fuse(config_for("projective"), 2);
+  SemanticTsdf tsdf = fuse(config_for("projective"), 3);  // 3 frames: labels need three frames' evidence
   test::TempDir dir("tsdf_ply");
   tsdf.write_mesh(dir / "mesh.ply");
   const TriangleMesh back = read_ply(dir / "mesh.ply");
