@@ -21,12 +21,7 @@
 #include "io/trajectory_io.hpp"
 #include "tracking/tracker.hpp"
 
-#ifdef SEMAP_HAVE_OPEN3D
-#include <open3d/camera/PinholeCameraIntrinsic.h>
-#include <open3d/geometry/Image.h>
-#include <open3d/geometry/RGBDImage.h>
-#include <open3d/pipelines/odometry/Odometry.h>
-#endif
+#include "bench/open3d_odometry.hpp"
 
 using namespace semap;
 using json = nlohmann::json;
@@ -91,53 +86,11 @@ json run_ours(const std::vector<Frame>& frames, const CameraModel& camera, const
 
 #ifdef SEMAP_HAVE_OPEN3D
 json run_open3d(const std::vector<Frame>& frames, const CameraModel& camera, const Trajectory& gt) {
-  namespace o3 = open3d;
-  const auto& k = camera.depth;
-  o3::camera::PinholeCameraIntrinsic intrinsic(k.width, k.height, k.fx, k.fy, k.cx, k.cy);
-  auto to_rgbd = [](const Frame& f) {
-    cv::Mat gray, grayf;
-    cv::cvtColor(f.rgb, gray, cv::COLOR_BGR2GRAY);
-    if (gray.size() != f.depth.size()) cv::resize(gray, gray, f.depth.size());
-    gray.convertTo(grayf, CV_32F, 1.0 / 255.0);
-    o3::geometry::Image intensity, depth;
-    intensity.Prepare(grayf.cols, grayf.rows, 1, 4);
-    depth.Prepare(f.depth.cols, f.depth.rows, 1, 4);
-    std::memcpy(intensity.data_.data(), grayf.data, intensity.data_.size());
-    cv::Mat d = f.depth.isContinuous() ? f.depth : f.depth.clone();
-    std::memcpy(depth.data_.data(), d.data, depth.data_.size());
-    return o3::geometry::RGBDImage(intensity, depth);
-  };
-  Trajectory traj;
-  std::vector<double> ms;
-  Pose pose = Pose::Identity();
-  Eigen::Matrix4d last_motion = Eigen::Matrix4d::Identity();
-  o3::geometry::RGBDImage previous;
-  size_t failures = 0;
-  for (size_t i = 0; i < frames.size(); ++i) {
-    const auto t0 = std::chrono::steady_clock::now();
-    o3::geometry::RGBDImage current = to_rgbd(frames[i]);
-    if (i > 0) {
-      o3::pipelines::odometry::OdometryOption option({20, 10, 5}, 0.07, 0.0, 4.0);
-      const auto [ok, t_prev_cur, info] = o3::pipelines::odometry::ComputeRGBDOdometry(
-          current, previous, intrinsic, last_motion,
-          o3::pipelines::odometry::RGBDOdometryJacobianFromHybridTerm(), option);
-      if (ok) {
-        last_motion = t_prev_cur;
-        Pose step;
-        step.matrix() = t_prev_cur;
-        pose = orthonormalized(pose * step);
-      } else {
-        ++failures;
-      }
-    }
-    previous = std::move(current);
-    ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
-    traj.push_back({frames[i].timestamp, pose});
-  }
-  json j = evaluate(gt, traj);
-  j["median_frame_ms"] = median(ms);
-  j["fps_median"] = 1000.0 / std::max(1e-9, median(ms));
-  j["failures"] = failures;
+  const baseline::Open3dOdometryRun run = baseline::run_open3d_odometry(frames, camera);
+  json j = evaluate(gt, run.trajectory);
+  j["median_frame_ms"] = median(run.frame_ms);
+  j["fps_median"] = 1000.0 / std::max(1e-9, median(run.frame_ms));
+  j["failures"] = run.failures;
   return j;
 }
 #endif

@@ -292,6 +292,8 @@ struct Accumulator {
   double sq_sum = 0.0;  ///< unweighted squared point-to-plane residuals
   int matched = 0;
   int photo_matched = 0;
+  double photo_weighted_sum = 0.0;  ///< sum of Huber weight * intensity residual
+  double photo_weight_sum = 0.0;    ///< sum of Huber weights
   int valid = 0;
 };
 
@@ -306,8 +308,10 @@ inline bool bilinear(const cv::Mat& img, float x, float y, float& out) {
   return true;
 }
 
+/// photo_bias: brightness offset of the target against the source (auto exposure), subtracted
+/// from every intensity residual.
 Accumulator accumulate(const DepthLevel& src, const DepthLevel& tgt, const Pose& t, int stride, double max_dist,
-                       double min_normal_cos, double huber, const IcpParams& params) {
+                       double min_normal_cos, double huber, const IcpParams& params, double photo_bias = 0.0) {
   const bool photometric = params.photometric_weight > 0 && !src.intensity.empty() && !tgt.intensity.empty();
   const float photo_max_dz = float(params.photometric_max_depth_difference);
   const double photo_huber = params.photometric_huber;
@@ -347,7 +351,7 @@ Accumulator accumulate(const DepthLevel& src, const DepthLevel& tgt, const Pose&
             float it, gx, gy;
             if (bilinear(tgt.intensity, uf, vf, it) && bilinear(tgt.grad_x, uf, vf, gx) &&
                 bilinear(tgt.grad_y, uf, vf, gy)) {
-              const double res = double(it) - double(src.intensity.at<float>(y, x));
+              const double res = double(it) - double(src.intensity.at<float>(y, x)) - photo_bias;
               const double iz = 1.0 / p.z();
               const double dfx = gx * k.fx * iz, dfy = gy * k.fy * iz;
               const Eigen::Vector3d gp(dfx, dfy, -(dfx * p.x() + dfy * p.y()) * iz);
@@ -358,6 +362,8 @@ Accumulator accumulate(const DepthLevel& src, const DepthLevel& tgt, const Pose&
               const double weight = a <= photo_huber ? 1.0 : photo_huber / a;
               hp.selfadjointView<Eigen::Upper>().rankUpdate(j, weight);
               acc.g_photo += weight * res * j;
+              acc.photo_weighted_sum += weight * res;
+              acc.photo_weight_sum += weight;
               ++acc.photo_matched;
             }
           }
@@ -395,6 +401,8 @@ Accumulator accumulate(const DepthLevel& src, const DepthLevel& tgt, const Pose&
     total.h_photo += p.h_photo;
     total.g_photo += p.g_photo;
     total.photo_matched += p.photo_matched;
+    total.photo_weighted_sum += p.photo_weighted_sum;
+    total.photo_weight_sum += p.photo_weight_sum;
     total.sq_sum += p.sq_sum;
     total.matched += p.matched;
     total.valid += p.valid;
@@ -410,6 +418,7 @@ IcpResult icp_point_to_plane(const std::vector<DepthLevel>& source, const std::v
   const int levels = int(std::min(source.size(), target.size()));
   const double min_cos = std::cos(params.max_normal_angle_deg * M_PI / 180.0);
   double last_update = 0.0;
+  double photo_bias = 0.0;
   bool failed = levels == 0;
   for (int l = levels - 1; l >= 0 && !failed; --l) {
     const int iterations = params.iterations.empty() ? 0
@@ -418,7 +427,9 @@ IcpResult icp_point_to_plane(const std::vector<DepthLevel>& source, const std::v
     const double max_dist = params.max_distance * std::pow(2.0, l);
     for (int it = 0; it < iterations; ++it) {
       const Accumulator acc =
-          accumulate(source[l], target[l], t, stride, max_dist, min_cos, params.huber_delta, params);
+          accumulate(source[l], target[l], t, stride, max_dist, min_cos, params.huber_delta, params, photo_bias);
+      // Brightness offset (auto exposure) re-estimated by alternation: robust mean residual.
+      if (params.photometric_bias && acc.photo_weight_sum > 0) photo_bias += acc.photo_weighted_sum / acc.photo_weight_sum;
       if (acc.matched < 30) {
         failed = true;
         break;
@@ -442,7 +453,7 @@ IcpResult icp_point_to_plane(const std::vector<DepthLevel>& source, const std::v
   result.T_target_source = t;
   if (levels > 0) {
     const Accumulator final_acc = accumulate(source[0], target[0], t, params.stride, params.max_distance, min_cos,
-                                             params.huber_delta, params);
+                                             params.huber_delta, params, photo_bias);
     result.matched = final_acc.matched;
     result.photometric_matched = final_acc.photo_matched;
     result.overlap = final_acc.valid ? double(final_acc.matched) / final_acc.valid : 0.0;

@@ -84,6 +84,7 @@ struct IcpParams {
   double photometric_weight = 0.0;
   double photometric_huber = 0.1;   ///< Huber threshold of the intensity residual (intensity in [0, 1])
   double photometric_max_depth_difference = 0.05;  ///< occlusion test against the target depth, metres
+  bool photometric_bias = false;    ///< estimate a global brightness offset (auto exposure) by alternation
 };
 struct IcpResult {
   bool converged = false;

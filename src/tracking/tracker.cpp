@@ -118,6 +118,7 @@ struct Tracker::Impl {
     icp_params.photometric_weight = cfg.icp_photometric_weight;
     icp_params.photometric_huber = cfg.icp_photometric_huber;
     icp_params.photometric_max_depth_difference = cfg.icp_photometric_max_depth_difference;
+    icp_params.photometric_bias = cfg.icp_photometric_bias;
     if (cfg.background_loop_closure) worker = std::thread([this] { worker_loop(); });
   }
 

@@ -41,6 +41,7 @@ struct TrackingConfig {
   double icp_photometric_weight = 0.3;  ///< weight of the intensity residual against the point-to-plane one, m^2 (0 = geometry only): (sigma_geo / sigma_I)^2 with sigma_geo ~ 1 cm, sigma_I ~ 5 grey levels
   double icp_photometric_huber = 0.1;   ///< Huber threshold of the intensity residual (intensity 0..1)
   double icp_photometric_max_depth_difference = 0.05;  ///< occlusion test of the photometric term, metres
+  bool icp_photometric_bias = false;    ///< estimate a brightness offset between frame and keyframe (auto exposure)
 
   // --- tracking loss (A2) ---
   double loss_max_icp_rmse = 0.03;     ///< ICP residual RMSE above this = lost, metres
@@ -62,7 +63,7 @@ struct TrackingConfig {
   int fern_width = 80;                 ///< downsampled encoding width, pixels
   int fern_height = 60;                ///< downsampled encoding height, pixels
   double fern_new_keyframe_similarity = 0.0;  ///< max similarity below this -> new keyframe (fraction of ferns)
-  double loop_min_similarity = 0.55;   ///< loop candidate needs at least this similarity (fraction)
+  double loop_min_similarity = 0.45;   ///< loop candidate needs at least this similarity (fraction); revisits of real Kinect views score 0.45-0.55 (exposure, viewpoint), geometric verification rejects false candidates
   int loop_min_keyframe_gap = 8;       ///< candidates must be this many keyframes older
   int loop_candidates = 3;             ///< best candidates verified geometrically per keyframe
   double loop_max_icp_rmse = 0.02;     ///< geometric verification: ICP RMSE limit, metres
@@ -107,6 +108,7 @@ struct TrackingConfig {
     v.param("icp_photometric_weight", icp_photometric_weight, "m^2", "joint ICP: weight of intensity residuals vs point-to-plane residuals (0 = off)");
     v.param("icp_photometric_huber", icp_photometric_huber, "", "Huber threshold of intensity residuals (0..1)");
     v.param("icp_photometric_max_depth_difference", icp_photometric_max_depth_difference, "m", "photometric residuals need the target depth this close");
+    v.param("icp_photometric_bias", icp_photometric_bias, "", "estimate a brightness offset (auto exposure) in the photometric term");
     v.param("loss_max_icp_rmse", loss_max_icp_rmse, "m", "ICP RMSE above this means tracking is lost");
     v.param("loss_min_overlap", loss_min_overlap, "", "matched fraction below this means lost");
     v.param("loss_max_translation_jump", loss_max_translation_jump, "m", "implausible jump from the motion prior");

@@ -1,6 +1,6 @@
-// TUM fr1_rpy, first 200 frames, tracked without ground truth. Fast regression guard on the
-// currently measured accuracy; the issue-4 target (ATE RMSE <= 2.5 cm) is asserted by
-// TrackingHeavy.TumFr1Rpy200IssueTarget (heavy suite) until it is met.
+// TUM fr1_rpy, first 200 frames, tracked without ground truth. Fast regression guard (measured
+// 2.0 cm ATE with the joint photometric + geometric ICP, 7.8 cm with geometry alone); the issue-4
+// figures (<= 2.5 cm and lower than Open3D) are asserted by TrackingHeavy.TumFr1Rpy200IssueTarget.
 #include <gtest/gtest.h>
 
 #include "test_support.hpp"
@@ -13,7 +13,7 @@ TEST(TrackingDatasets, TumFr1Rpy200RegressionGuard) {
   TrackingConfig config;
   config.background_loop_closure = false;  // deterministic
   const auto run = test::run_tracker_on(dir, 200, config);
-  EXPECT_LE(run.ate_rmse, 0.10);
+  EXPECT_LE(run.ate_rmse, 0.03);
   EXPECT_GT(run.rpe_trans, 0.0);
   EXPECT_LE(run.lost, 10u);
   EXPECT_GE(run.stats.keyframes, 2u);

@@ -136,6 +136,41 @@ TEST(PointToPlaneIcp, RecoversKnownMotionCoarseToFine) {
   EXPECT_GT(translation_error(Pose::Identity(), truth), 0.09);
 }
 
+// A textured wall seen head-on: sliding along it leaves the point-to-plane cost flat, only the
+// photometric term (joint ICP) sees the motion.
+TEST(PointToPlaneIcp, PhotometricTermRecoversSlidingAlongTexturedPlane) {
+  PinholeIntrinsics k;  // 640x480, f = 525
+  const double tx = 0.04, ty = -0.025;
+  auto render = [&](double ox, double oy, cv::Mat& depth, cv::Mat& gray) {
+    depth.create(k.height, k.width, CV_32FC1);
+    depth.setTo(2.0f);
+    gray.create(k.height, k.width, CV_8UC1);
+    for (int v = 0; v < k.height; ++v)
+      for (int u = 0; u < k.width; ++u) {
+        const double x = (u - k.cx) / k.fx * 2.0 + ox, y = (v - k.cy) / k.fy * 2.0 + oy;
+        gray.at<uint8_t>(v, u) =
+            cv::saturate_cast<uint8_t>(128 + 60 * std::sin(2 * M_PI * x / 0.3) * std::cos(2 * M_PI * y / 0.25));
+      }
+  };
+  cv::Mat depth_a, gray_a, depth_b, gray_b;
+  render(0, 0, depth_a, gray_a);
+  render(tx, ty, depth_b, gray_b);
+  const auto pa = build_depth_pyramid(depth_a, k, 3, 0.1, 10.0, true, gray_a);
+  const auto pb = build_depth_pyramid(depth_b, k, 3, 0.1, 10.0, true, gray_b);
+  ASSERT_FALSE(pa[2].intensity.empty());
+  const Pose truth = make_pose(0, 0, 0, tx, ty, 0);  // T_a_b
+  IcpParams geometric;
+  geometric.max_distance = 0.15;
+  const IcpResult g = icp_point_to_plane(pb, pa, Pose::Identity(), geometric);
+  EXPECT_GT(translation_error(g.T_target_source, truth), 0.03);  // the slide is invisible to geometry
+  IcpParams joint = geometric;
+  joint.photometric_weight = 0.3;
+  const IcpResult j = icp_point_to_plane(pb, pa, Pose::Identity(), joint);
+  EXPECT_GT(j.photometric_matched, 1000);
+  EXPECT_LT(translation_error(j.T_target_source, truth), 0.003);
+  EXPECT_LT(rotation_error(j.T_target_source, truth), 0.2 * M_PI / 180);
+}
+
 TEST(DepthRepair, FillsHolesWithSameGreyMedianAndKeepsValidPixels) {
   const int w = 40, h = 30;
   cv::Mat gray(h, w, CV_8UC1, cv::Scalar(50));
