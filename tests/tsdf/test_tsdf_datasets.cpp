@@ -115,6 +115,8 @@ TEST_P(SyntheticQuality, NoisyLabelsBayesianLayerAndCompactRule) {
   // a patch seen in a few frames, some of which flickered together (a whole wall turns
   // "ceiling" in a frame), otherwise shows a class the scene does not have, which the eval
   // counts with IoU 0. The compact vote shows a margin of 2 (mesh_min_label_votes).
+  // Measured (seed 3): 90 frames 320x240 grouped Bayes 0.925 / vote 0.924; 300 frames 640x480
+  // grouped Bayes 0.965 / vote 0.892 (2 stray-class vertices), projective Bayes 0.953 / vote 0.954.
   TsdfConfig cfg;
   cfg.voxel_size = 0.02;
   cfg.integrator = GetParam();
