@@ -30,6 +30,8 @@ struct ObjectsConfig {
   double felzenszwalb_k = 2.0;          ///< K of the graph clustering (C2.5)
   int min_segment_points = 50;          ///< object segments with fewer points are dropped
   double mask_min_score = 0.0;          ///< detections below this score are ignored
+  double mask_depth_gate_k = 0.0;       ///< > 0: mask pixels beyond median +- k * sigma_MAD of the mask's depth are background (0: off; k = 3 cost D10 GT-mask WOv 0.79 -> 0.78 and did not shrink redkitchen boxes)
+  double mask_depth_gate_min = 0.1;     ///< m per m of median depth: the gate is never narrower than this
 
   // --- C3/C4: map and association ---
   double map_voxel_size = 0.01;       ///< m, instance point sets are voxel-downsampled to this
@@ -76,6 +78,8 @@ struct ObjectsConfig {
     v.param("felzenszwalb_k", felzenszwalb_k, "", "K of the graph clustering (C2.5)");
     v.param("min_segment_points", min_segment_points, "points", "drop smaller object segments");
     v.param("mask_min_score", mask_min_score, "", "ignore detections below this score");
+    v.param("mask_depth_gate_k", mask_depth_gate_k, "", "mask pixels farther than k robust sigmas (1.4826 MAD) from the mask's median depth are background; 0 off");
+    v.param("mask_depth_gate_min", mask_depth_gate_min, "m/m", "minimum half-width of the mask depth gate, per m of median depth");
     v.param("map_voxel_size", map_voxel_size, "m", "voxel size of instance point sets (C3)");
     v.param("association_distance", association_distance, "m", "d_assoc centroid gate (C4)");
     v.param("overlap_distance", overlap_distance, "m", "d_point of the overlap test (C4)");
@@ -109,6 +113,8 @@ struct ObjectsConfig {
     require_param(weight_different_masks > weight_background, "objects.weight_different_masks",
                   "must exceed weight_background");
     require_param(felzenszwalb_k > 0, "objects.felzenszwalb_k", "must be > 0");
+    require_param(mask_depth_gate_k >= 0, "objects.mask_depth_gate_k", "must be >= 0");
+    require_param(mask_depth_gate_min >= 0, "objects.mask_depth_gate_min", "must be >= 0");
     require_param(min_segment_points >= 1, "objects.min_segment_points", "must be >= 1");
     require_param(map_voxel_size > 0, "objects.map_voxel_size", "must be > 0");
     require_param(association_distance > 0, "objects.association_distance", "must be > 0");

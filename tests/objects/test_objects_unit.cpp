@@ -5,6 +5,7 @@
 #include <cmath>
 #include <random>
 
+#include "objects/frame_segmenter.hpp"
 #include "objects/object_map.hpp"
 #include "objects/segment_graph.hpp"
 
@@ -279,4 +280,66 @@ TEST(ObjectsMap, InstanceIdsForPoints) {
   EXPECT_EQ(ids[0], map.instances()[0].id);
   EXPECT_EQ(ids[1], map.instances()[1].id);
   EXPECT_EQ(ids[2], 0u);
+}
+
+namespace {
+// A 64x48 depth image: a fronto-parallel plate at 1 m (or a plane tilted in depth from 1 to 2 m
+// across the mask) with the mask spilling 4 px over its right edge onto a wall at 3 m.
+struct GateScene {
+  Frame frame;
+  SegmentationResult seg;
+  CameraModel camera;
+};
+GateScene gate_scene(bool tilted) {
+  GateScene s;
+  s.camera.depth = {50.0, 50.0, 32.0, 24.0, 64, 48};
+  s.frame.depth = cv::Mat(48, 64, CV_32FC1, cv::Scalar(3.f));
+  for (int v = 10; v < 38; ++v)
+    for (int u = 10; u < 40; ++u) s.frame.depth.at<float>(v, u) = tilted ? 1.f + (u - 10) / 29.f : 1.f + 0.002f * (u % 3);
+  InstanceDetection det;
+  det.id = 1;
+  det.class_id = id(Label::kTable);
+  det.score = 1.f;
+  det.mask = cv::Mat::zeros(48, 64, CV_8UC1);
+  det.mask(cv::Rect(10, 10, 34, 28)).setTo(255);  // 4 px of wall on the right
+  det.box = cv::Rect(10, 10, 34, 28);
+  s.seg.instances.push_back(det);
+  return s;
+}
+float max_camera_depth(const std::vector<ObjectSegment>& segments) {
+  float z = 0.f;
+  for (const auto& seg : segments)
+    for (const auto& p : seg.points) z = std::max(z, p.z());  // identity pose: world = camera
+  return z;
+}
+}  // namespace
+
+TEST(ObjectsSegmenter, MaskDepthGateDropsSurfaceBehindTheObject) {
+  for (const std::string mode : {"backprojection", "supervoxel"}) {
+    SCOPED_TRACE(mode);
+    ObjectsConfig c;
+    c.segmentation_mode = mode;
+    c.pixel_stride = 1;
+    c.min_segment_points = 10;
+    c.mask_depth_gate_k = 3.0;
+    GateScene s = gate_scene(false);
+    const auto gated = FrameSegmenter(c, s.camera).segment(s.frame, s.seg, Pose::Identity());
+    ASSERT_EQ(gated.size(), 1u);
+    EXPECT_LT(max_camera_depth(gated), 1.1f);
+    EXPECT_GE(gated[0].points.size(), 30u * 28u * 9 / 10);  // the plate itself stays
+    c.mask_depth_gate_k = 0.0;  // off: the wall strip joins the object
+    const auto plain = FrameSegmenter(c, s.camera).segment(s.frame, s.seg, Pose::Identity());
+    ASSERT_EQ(plain.size(), 1u);
+    if (mode == "backprojection") EXPECT_GT(max_camera_depth(plain), 2.9f);
+  }
+  // A surface spanning 1-2 m in depth inside its own mask is kept whole (MAD scales the gate).
+  ObjectsConfig c;
+  c.segmentation_mode = "backprojection";
+  c.pixel_stride = 1;
+  c.mask_depth_gate_k = 3.0;
+  GateScene s = gate_scene(true);
+  const auto tilted = FrameSegmenter(c, s.camera).segment(s.frame, s.seg, Pose::Identity());
+  ASSERT_EQ(tilted.size(), 1u);
+  EXPECT_EQ(tilted[0].points.size(), 30u * 28u);
+  EXPECT_NEAR(max_camera_depth(tilted), 2.0f, 1e-3f);
 }
