@@ -25,7 +25,7 @@ struct TsdfConfig {
 
   // Labels (B6 compact rule, A6 Bayesian layer).
   bool label_layer = true;       ///< compact vote: label byte + 1-byte vote confidence per voxel
-  bool bayes_layer = false;      ///< Bayesian top-k class probabilities per voxel (A6)
+  bool bayes_layer = true;       ///< Bayesian top-k class probabilities per voxel (A6); default by measurement: semap demo (20 % flicker) mIoU 0.943 vs 0.863 compact vote, clean labels equal
   int bayes_top_k = 4;           ///< k classes kept per voxel (2 bytes each)
   double bayes_default_confidence = 0.7;  ///< P(label) when only labels are given
   int bayes_confusion_classes = 4;        ///< m: a wrong label is one of ~m confusable classes (A6 likelihood)
