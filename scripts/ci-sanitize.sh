@@ -21,7 +21,11 @@ start=$SECONDS
 cmake -S . -B build-asan "${COMMON[@]}" -DSEMAP_SANITIZE=address,undefined >/dev/null
 cmake --build build-asan -j "$JOBS"
 echo "semap sanitize: ASan+UBSan build in $((SECONDS - start)) s"
-export ASAN_OPTIONS=detect_leaks=1:halt_on_error=1:detect_stack_use_after_return=0
+# alloc_dealloc_mismatch=0: PCL 1.13 (built as C++14) gives its point clouds a class-specific
+# aligned operator new that a C++17/20 client does not see, so the shared_ptr deleter instantiated
+# in our code frees them with the global sized delete. Every report of the first full run
+# (2026-11-30) was this one PCL-internal pair (SupervoxelClustering::getVoxels); nothing else.
+export ASAN_OPTIONS=detect_leaks=1:halt_on_error=1:detect_stack_use_after_return=0:alloc_dealloc_mismatch=0
 export LSAN_OPTIONS=suppressions=$SUPP/lsan.supp:print_suppressions=0
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 t0=$SECONDS
