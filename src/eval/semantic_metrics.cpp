@@ -5,7 +5,7 @@
 #include <string>
 
 #include "core/error.hpp"
-#include "eval/statistics.hpp"
+#include "core/statistics.hpp"
 #include "eval/nearest_neighbors.hpp"
 #include "io/ply_io.hpp"
 

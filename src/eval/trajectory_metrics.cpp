@@ -7,7 +7,7 @@
 #include <string>
 
 #include "core/error.hpp"
-#include "eval/statistics.hpp"
+#include "core/statistics.hpp"
 #include "io/association.hpp"
 
 namespace semap {

@@ -7,7 +7,7 @@
 #include <numeric>
 
 #include "core/error.hpp"
-#include "eval/statistics.hpp"
+#include "core/statistics.hpp"
 #include "objects/segment_graph.hpp"
 #include "objects/supervoxel_graph.hpp"
 
@@ -209,15 +209,15 @@ std::vector<ObjectSegment> FrameSegmenter::segment(const Frame& frame, const Seg
   // the segment's detection, so the object keeps
   // the surface of every observation at the map's resolution while C2 runs on the coarser cloud.
   const int fine = std::min(config_.point_stride, stride);
-  std::vector<int> label_of_point(cloud.points.size(), 0);
-  for (const auto& [label, indices] : points_of_detection)
-    for (int i : indices) label_of_point[i] = label;
   struct ExtraPoints {
     std::vector<Eigen::Vector3f> points;
     std::vector<Rgb8> colours;
   };
   std::map<int, ExtraPoints> extra_of_detection;
   if (fine < stride) {
+    std::vector<int> label_of_point(cloud.points.size(), 0);
+    for (const auto& [label, indices] : points_of_detection)
+      for (int i : indices) label_of_point[i] = label;
     for (int v = 0; v < height; v += fine) {
       const float* drow = frame.depth.ptr<float>(v);
       for (int u = 0; u < width; u += fine) {

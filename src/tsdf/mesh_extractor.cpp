@@ -117,16 +117,18 @@ MeshExtractor::BlockMesh MeshExtractor::mesh_block(const TsdfMap& map, const Blo
             // Label of the edge's corner nearest to the surface; when that one has too little
             // evidence to show a label, the other corner of the same edge (same surface patch).
             const bool a_nearer = std::fabs(a.sdf) <= std::fabs(b.sdf);
-            const Sample& nearest = (a_nearer ? a : b).label != 0 ? (a_nearer ? a : b) : (a_nearer ? b : a);
+            const Sample& closer = a_nearer ? a : b;
+            const Sample& farther = a_nearer ? b : a;
+            const Sample& corner = closer.label != 0 ? closer : farther;
             slot = static_cast<int32_t>(mesh.positions.size());
             mesh.positions.push_back(p);
             mesh.edge_keys.push_back(edge_key(base + lo, axis));
-            mesh.labels.push_back(nearest.label);
+            mesh.labels.push_back(corner.label);
             if (rgb) {
               auto mix = [&](uint8_t ca, uint8_t cb) { return static_cast<uint8_t>(std::lround(ca + t * (cb - ca))); };
               mesh.colours.push_back(Rgb8{mix(a.colour.r, b.colour.r), mix(a.colour.g, b.colour.g), mix(a.colour.b, b.colour.b)});
             } else {
-              mesh.colours.push_back(nearest.colour);
+              mesh.colours.push_back(corner.colour);
             }
           }
           vertex_of_edge[e] = slot;

@@ -1,5 +1,5 @@
 #pragma once
-// Small statistics shared by the metrics.
+// Small statistics shared by the stages and the metrics.
 #include <algorithm>
 #include <vector>
 
