@@ -2,9 +2,11 @@
 
 #include <spdlog/spdlog.h>
 #include <tbb/global_control.h>
+#include <tbb/parallel_pipeline.h>
 
 #include <atomic>
 #include <condition_variable>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <opencv2/imgcodecs.hpp>
@@ -43,6 +45,27 @@ struct TrackedFrame {
   Pose T_world_camera;
   bool segment = false;        ///< sent to the segmenter; fusion waits for its labels
   bool map_objects = false;    ///< its segmentation also feeds the object map
+};
+
+/// A frame as read from the dataset; nullopt when it was unreadable (skipped).
+struct LoadedFrame {
+  size_t index = 0;
+  std::optional<Frame> frame;
+};
+
+/// Joins the stage threads when the pipeline scope ends, normally or by an exception
+/// (after on_exit has closed the queues the threads wait on).
+struct StageThreads {
+  std::vector<std::thread> threads;
+  std::function<void()> on_exit;
+  void join_all() {
+    for (std::thread& t : threads)
+      if (t.joinable()) t.join();
+  }
+  ~StageThreads() {
+    if (on_exit) on_exit();
+    join_all();
+  }
 };
 
 /// What fusion hands to the object map.
@@ -124,6 +147,22 @@ std::unique_ptr<Segmenter> build_segmenter(const RunOptions& options, const Sema
                                                 noise, 1);
   }
   return make_segmenter(spec, config.segmentation, dataset.camera());
+}
+
+/// How far the optimised poses move a surface point at `range` metres, worst frame (metres):
+/// translation change plus rotation change times the range. Frames are matched by timestamp.
+double max_surface_displacement(const Trajectory& online, const Trajectory& optimised, double range) {
+  double worst = 0.0;
+  size_t k = 0;
+  for (const StampedPose& a : online) {
+    while (k < optimised.size() && optimised[k].timestamp < a.timestamp - 1e-9) ++k;
+    if (k >= optimised.size()) break;
+    if (std::abs(optimised[k].timestamp - a.timestamp) > 1e-6) continue;
+    const Pose& b = optimised[k].T_world_camera;
+    const double angle = Eigen::AngleAxisd(b.linear() * a.T_world_camera.linear().transpose()).angle();
+    worst = std::max(worst, (b.translation() - a.T_world_camera.translation()).norm() + angle * range);
+  }
+  return worst;
 }
 
 /// Ground-truth poses when present, or nullopt.
@@ -240,24 +279,27 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
     objects_in_map = objects.instances().size();
   };
 
-  // Reads, repairs and tracks frame i. Returns nullopt for a skipped frame.
-  auto track_frame = [&](size_t i) -> std::optional<TrackedFrame> {
-    auto t0 = Clock::now();
-    Frame frame;
+  // Reads frame i; nullopt (counted, warned) for an unreadable frame (issue 8).
+  auto load_frame = [&](size_t i) -> std::optional<Frame> {
+    const auto t0 = Clock::now();
     try {
-      frame = dataset->load(i);
+      Frame frame = dataset->load(i);
+      timings.add("read", ms_since(t0));
+      return frame;
     } catch (const Error& e) {
       spdlog::warn("skipping frame {}: {}", i, e.what());
       ++skipped_frames;
       return std::nullopt;
     }
-    timings.add("read", ms_since(t0));
+  };
+  // Repairs and tracks a loaded frame. Returns nullopt for a skipped frame.
+  auto track_frame = [&](Frame frame) -> std::optional<TrackedFrame> {
+    const auto t0 = Clock::now();
     TrackedFrame item;
-    t0 = Clock::now();
     if (use_gt_poses) {
       const auto pose = usable_pose(frame.gt_T_world_camera);
       if (!pose) {
-        spdlog::warn("skipping frame {}: no valid ground-truth pose", i);
+        spdlog::warn("skipping frame {}: no valid ground-truth pose", frame.index);
         ++skipped_frames;
         return std::nullopt;
       }
@@ -285,7 +327,8 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
   if (sequential) {
     // One thread: the same order every time -> byte-identical outputs (issue 8).
     for (size_t i = 0; i < frame_count; ++i) {
-      auto item = track_frame(i);
+      auto frame = load_frame(i);
+      auto item = frame ? track_frame(std::move(*frame)) : std::nullopt;
       if (item) {
         std::optional<SegmentationResult> seg;
         if (item->segment) {
@@ -308,18 +351,28 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
     BoundedQueue<TrackedFrame> fusion_queue(config.pipeline.queue_size);
     BoundedQueue<Frame> segmentation_queue(static_cast<size_t>(config.segmentation.async_queue_size));
     BoundedQueue<ObjectWork> object_queue(config.pipeline.queue_size);
+    BoundedQueue<LoadedFrame> read_queue(config.pipeline.queue_size);
     std::atomic<size_t> segmentation_in_flight{0};
+    // On an exception in the tracking loop every queue is closed and every stage joined, so
+    // the error reaches the caller instead of std::terminate.
+    StageThreads threads_guard;
+    threads_guard.on_exit = [&] {
+      read_queue.close();
+      segmentation_queue.close();
+      fusion_queue.close();
+      object_queue.close();
+    };
 
-    std::thread segmentation_thread([&] {
+    threads_guard.threads.emplace_back([&] {
       while (auto frame = segmentation_queue.pop()) {
         seg_results.put(frame->index, run_segmentation(*frame));
         --segmentation_in_flight;
       }
     });
-    std::thread object_thread([&] {
+    threads_guard.threads.emplace_back([&] {
       while (auto work = object_queue.pop()) map_objects(*work);
     });
-    std::thread fusion_thread([&] {
+    threads_guard.threads.emplace_back([&] {
       std::map<size_t, TrackedFrame> waiting;  // frames held until their labels arrive
       auto fuse_ready = [&](bool block) {
         for (auto it = waiting.begin(); it != waiting.end();) {
@@ -342,8 +395,15 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
       object_queue.close();
     });
 
-    for (size_t i = 0; i < frame_count; ++i) {
-      auto item = track_frame(i);
+    // Reading (PNG decoding) runs ahead of tracking on its own thread, in frame order.
+    threads_guard.threads.emplace_back([&] {
+      for (size_t i = 0; i < frame_count; ++i)
+        if (!read_queue.push({i, load_frame(i)})) break;
+      read_queue.close();
+    });
+
+    while (auto loaded = read_queue.pop()) {
+      auto item = loaded->frame ? track_frame(std::move(*loaded->frame)) : std::nullopt;
       if (item) {
         if (item->segment) {
           // Non-blocking hand-off: drop the request when the network is still busy.
@@ -358,14 +418,12 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
         }
         fusion_queue.push(std::move(*item));
       }
-      frames_done = i + 1;
-      if (options.show_progress) progress.update(i + 1, progress_extra());
+      frames_done = loaded->index + 1;
+      if (options.show_progress) progress.update(frames_done, progress_extra());
     }
     segmentation_queue.close();
     fusion_queue.close();
-    segmentation_thread.join();
-    fusion_thread.join();
-    object_thread.join();
+    threads_guard.join_all();
   }
   const double online_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
 
@@ -373,31 +431,56 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
   Trajectory trajectory = online_trajectory;
   bool map_refreshed = false;
   TrackerStats tracker_stats;
+  double max_pose_correction = 0.0;
   if (tracker) {
     const auto t0 = Clock::now();
     trajectory = tracker->finish();
     tracker_stats = tracker->stats();
     timings.add("pose_graph_final", ms_since(t0));
-    // The map uses the optimised poses: when loop closure moved keyframes, the TSDF is rebuilt
-    // from every frame with its optimised pose and the labels archived for segmented frames.
-    if (tracker_stats.loop_edges > 0) {
+    // The map uses the optimised poses: when loop closure moved the frames by more than a
+    // quarter voxel (at the far end of the depth range), the TSDF is rebuilt from every frame
+    // with its optimised pose and the labels archived for segmented frames.
+    max_pose_correction = max_surface_displacement(online_trajectory, trajectory, config.tsdf.max_range);
+    if (tracker_stats.loop_edges > 0 && max_pose_correction > 0.25 * config.tsdf.voxel_size) {
       const auto t1 = Clock::now();
       SemanticTsdf refreshed(config.tsdf);
-      size_t k = 0;
-      for (size_t i = 0; i < frame_count && k < trajectory.size(); ++i) {
-        Frame frame;
-        try {
-          frame = dataset->load(i);
-        } catch (const Error&) {
-          continue;
-        }
-        while (k < trajectory.size() && trajectory[k].timestamp < frame.timestamp - 1e-9) ++k;
-        if (k >= trajectory.size() || std::abs(trajectory[k].timestamp - frame.timestamp) > 1e-6) continue;
-        if (config.tracking.depth_repair) frame.depth = repair_depth(frame.depth, frame.rgb, repair);
-        IntegrationInput input = make_integration_input(frame, camera.depth, trajectory[k].T_world_camera);
-        input.labels = label_archive.find(frame.index);
-        refreshed.integrate(input);
-      }
+      // Reading, repair and label decoding run in parallel; integration stays serial in frame
+      // order, so one thread still gives byte-identical maps (issue 8).
+      auto pose_at = [&](double timestamp) -> std::optional<Pose> {
+        const auto it = std::lower_bound(trajectory.begin(), trajectory.end(), timestamp - 1e-9,
+                                         [](const StampedPose& p, double t) { return p.timestamp < t; });
+        if (it == trajectory.end() || std::abs(it->timestamp - timestamp) > 1e-6) return std::nullopt;
+        return it->T_world_camera;
+      };
+      size_t next = 0;
+      tbb::parallel_pipeline(
+          static_cast<size_t>(2 * threads),
+          tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
+                                         [&](tbb::flow_control& fc) -> size_t {
+                                           if (next >= frame_count) fc.stop();
+                                           return next++;
+                                         }) &
+              tbb::make_filter<size_t, std::optional<IntegrationInput>>(
+                  tbb::filter_mode::parallel,
+                  [&](size_t i) -> std::optional<IntegrationInput> {
+                    Frame frame;
+                    try {
+                      frame = dataset->load(i);
+                    } catch (const Error&) {
+                      return std::nullopt;  // warned and counted in the online pass
+                    }
+                    const auto pose = pose_at(frame.timestamp);
+                    if (!pose) return std::nullopt;
+                    if (config.tracking.depth_repair) frame.depth = repair_depth(frame.depth, frame.rgb, repair);
+                    IntegrationInput input = make_integration_input(frame, camera.depth, *pose);  // shares the images
+                    input.labels = label_archive.find(frame.index);
+                    return input;
+                  }) &
+              tbb::make_filter<std::optional<IntegrationInput>, void>(
+                  tbb::filter_mode::serial_in_order,
+                  [&](const std::optional<IntegrationInput>& input) {
+                    if (input) refreshed.integrate(*input);
+                  }));
       tsdf = std::move(refreshed);
       map_refreshed = true;
       timings.add("map_refresh", ms_since(t1));
@@ -473,6 +556,7 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
       {"segmenter", segmenter ? segmenter->name() : std::string("none")},
       {"loop_edges", tracker_stats.loop_edges},
       {"map_refreshed_with_optimised_poses", map_refreshed},
+      {"max_pose_correction_m", max_pose_correction},
       {"mesh_vertices", mesh.vertices.size()},
       {"mesh_triangles", mesh.triangles.size()},
       {"fps_online", frames_done.load() / std::max(online_s, 1e-9)},
