@@ -92,9 +92,10 @@ struct VoxelUpdater {
     if (colour_layer && colour) {
       Rgb8& c = block.colour[li];
       const float a = W / W_new, b = w / W_new;
-      c.r = static_cast<uint8_t>(std::lround(a * c.r + b * colour->r));
-      c.g = static_cast<uint8_t>(std::lround(a * c.g + b * colour->g));
-      c.b = static_cast<uint8_t>(std::lround(a * c.b + b * colour->b));
+      // + 0.5 and truncation: rounding of a non-negative value, without a libm call per voxel.
+      c.r = static_cast<uint8_t>(a * c.r + b * colour->r + 0.5f);
+      c.g = static_cast<uint8_t>(a * c.g + b * colour->g + 0.5f);
+      c.b = static_cast<uint8_t>(a * c.b + b * colour->b + 0.5f);
     }
     if (label != 0 && std::fabs(d) <= label_band) update_labels(block, li, label, observation);
     return true;

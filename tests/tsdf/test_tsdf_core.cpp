@@ -2,6 +2,7 @@
 // B5 grouping, the compact label vote and the A6 Bayesian update, the block hash table.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <unordered_map>
@@ -56,6 +57,29 @@ TEST(WeightQuantizer, MonotoneLogScale) {
   }
   EXPECT_EQ(q.encode(1e9f), 255);
   EXPECT_GE(q.encode(1e-9f), 1);  // observed stays observed
+}
+
+// The quantisers find codes by a table search (no logarithm per voxel update); the codes must
+// be those of the closed forms round(log1p(w / unit) / L) and round(-ln p / step).
+TEST(Quantizers, TableSearchEqualsClosedForm) {
+  const WeightQuantizer wq(0.01, 1000.0);
+  const double L = std::log1p(1000.0 / 0.01) / 255.0;
+  const BayesLayerCodec codec(4, 1e-5);
+  const double step = -std::log(1e-5) / 255.0;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> log_w(std::log(1e-4), std::log(999.0)), log_p(std::log(1.1e-5), 0.0);
+  int mismatches = 0;
+  for (int i = 0; i < 200000; ++i) {
+    const float w = static_cast<float>(std::exp(log_w(rng)));
+    const long qw = std::clamp(std::lround(std::log1p(double(w) / 0.01) / L), 1L, 255L);
+    mismatches += wq.encode(w) != qw;
+    const float p = static_cast<float>(std::exp(log_p(rng)));
+    const long qp = std::clamp(std::lround(-std::log(double(p)) / step), 0L, 255L);
+    mismatches += codec.encode(p) != qp;
+  }
+  EXPECT_EQ(mismatches, 0);
+  EXPECT_EQ(codec.encode(1.0f), 0);
+  EXPECT_EQ(codec.encode(1e-6f), 255);
 }
 
 TEST(SemanticGrouping, PicksWeightedMajorityLabelAndItsMean) {
