@@ -7,7 +7,7 @@
 // Each point of the table is its own `semap run`-equivalent process (this program re-executed
 // with --child), so its peak RSS is that run's own.
 //   bench_memory [--frames 10000] [--loop-frames 500] [--width 160] [--height 120]
-//                [--threads 2] [--drop-distance 1.5] [--out DIR]
+//                [--threads 2] [--drop-distance 3.0] [--out DIR]
 // Prints one JSON object: {"rows": [{frames, peak_rss_mb, blocks, objects, object_points, wall_s}], ...}.
 #include <cmath>
 #include <cstdio>
@@ -68,7 +68,7 @@ void repeat_list(const fs::path& loop_dir, const fs::path& long_dir, const std::
 struct Args {
   size_t frames = 10000;
   int loop_frames = 500, width = 160, height = 120, threads = 2;
-  double drop_distance = 1.5;
+  double drop_distance = 3.0;  // about half of the 6 x 5 m synthetic room stays in the map
   fs::path out = fs::temp_directory_path() / "semap_bench_memory";
   // --child: one run
   size_t child_frames = 0;

@@ -266,7 +266,7 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
       input.labels = temporal_filter.apply(seg->labels, item.frame.depth, item.T_world_camera);
       input.confidence = seg->confidence;
       input.probabilities = seg->probabilities;
-      label_archive.store(item.frame.index, input.labels);
+      if (tracker) label_archive.store(item.frame.index, input.labels);  // only a tracked run refreshes
     }
     tsdf.integrate(input);
     timings.add("tsdf_integration", ms_since(t0));
