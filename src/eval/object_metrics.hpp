@@ -4,8 +4,9 @@
 //
 // Every object (GT or map) is a set of occupied voxels (voxel_size_m grid, default 2 cm) of
 // its surface points; IoU(A, B) = |A n B| / |A u B| on those voxel sets. Surface voxel IoU
-// is strict: a surface sitting on a voxel border can fall into either layer, and a map
-// surface off by more than ~1 voxel scores 0 there.
+// is strict: a map surface off by more than ~1 voxel scores 0 there. The grid origin is offset
+// by a fixed non-round fraction of a voxel so that faces at round coordinates (synthetic
+// scenes) do not sit on cell borders, where float rounding would split them between layers.
 //  - WOv = sum_i |G_i| max_j IoU(G_i, S_j) / sum_i |G_i| over GT objects G_i and ALL map
 //    objects S_j (class-agnostic, exactly C6). wov_same_class restricts j to S_j of G_i's class.
 //  - Precision/recall at threshold t: candidate pairs (G_i, S_j) of the SAME class with

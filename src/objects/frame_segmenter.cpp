@@ -98,6 +98,17 @@ void gate_mask_depth(std::vector<int>& mask_index, const cv::Mat& depth, int num
 
 std::vector<ObjectSegment> FrameSegmenter::segment(const Frame& frame, const SegmentationResult& seg,
                                                    const Pose& T_world_camera, FrameSegmentationStats* stats) const {
+  return run(frame, seg, T_world_camera, config_.segmentation_mode == "backprojection", stats);
+}
+
+std::vector<ObjectSegment> FrameSegmenter::backproject(const Frame& frame, const SegmentationResult& seg,
+                                                       const Pose& T_world_camera) const {
+  return run(frame, seg, T_world_camera, true, nullptr);
+}
+
+std::vector<ObjectSegment> FrameSegmenter::run(const Frame& frame, const SegmentationResult& seg,
+                                               const Pose& T_world_camera, bool backprojection,
+                                               FrameSegmentationStats* stats) const {
   std::vector<ObjectSegment> result;
   if (frame.depth.empty()) return result;
   if (frame.depth.type() != CV_32FC1) throw Error(frame.depth_path, "depth must be CV_32FC1 metres");
@@ -117,7 +128,6 @@ std::vector<ObjectSegment> FrameSegmenter::segment(const Frame& frame, const Seg
   };
   FrameCloud cloud;
   const int stride = config_.pixel_stride;
-  const bool backprojection = config_.segmentation_mode == "backprojection";
   // Cloud point index of each stride cell's sample (-1: none), for the dense point pass below.
   const int cells_u = (width + stride - 1) / stride;
   std::vector<int> cell_point(static_cast<size_t>(cells_u) * ((height + stride - 1) / stride), -1);
@@ -194,8 +204,30 @@ std::vector<ObjectSegment> FrameSegmenter::segment(const Frame& frame, const Seg
     for (int c = 0; c < num_components; ++c)
       component_label[c] = static_cast<int>(std::max_element(votes[c].begin(), votes[c].end()) - votes[c].begin());
     for (size_t i = 0; i < graph.nodes.size(); ++i) {
-      auto& list = points_of_detection[component_label[component[i]]];
-      list.insert(list.end(), graph.nodes[i].point_indices.begin(), graph.nodes[i].point_indices.end());
+      const int label = component_label[component[i]];
+      const auto& node = graph.nodes[i];
+      if (!config_.point_mask_refinement || label == 0) {
+        auto& list = points_of_detection[label];
+        list.insert(list.end(), node.point_indices.begin(), node.point_indices.end());
+        continue;
+      }
+      // Extension to C2.6 (config point_mask_refinement): the segment is C2's, but a point
+      // joins it only where its own pixel carries this detection's mask. Supervoxels straddle
+      // borders, so without this the floor under a chair or the table under a monitor joins
+      // the object. Measured with the unowned rule below: D10n GT masks, 60 keyframes, WOv
+      // 0.790 -> 0.816; noisy test supervoxel WOv 0.747 -> 0.777. Also keeping background-mask
+      // points of supervoxels mostly of this mask (eroded borders) scored lower on both
+      // (0.809, 0.762).
+      for (int p : node.point_indices) points_of_detection[cloud.mask[p] == label ? label : 0].push_back(p);
+    }
+    if (config_.point_mask_refinement) {
+      // Points VCCS leaves in no supervoxel (beyond supervoxel_adopt_radius of any) carry no C2
+      // evidence: their own mask decides, as in back-projection, instead of dropping them.
+      std::vector<char> owned(cloud.points.size(), 0);
+      for (const auto& node : graph.nodes)
+        for (int p : node.point_indices) owned[p] = 1;
+      for (size_t p = 0; p < cloud.points.size(); ++p)
+        if (!owned[p]) points_of_detection[cloud.mask[p]].push_back(static_cast<int>(p));
     }
     if (stats) {
       stats->supervoxels = graph.nodes.size();

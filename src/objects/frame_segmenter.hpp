@@ -35,8 +35,13 @@ class FrameSegmenter {
   /// Object segments of one frame (C2). Throws semap::Error on inconsistent images.
   std::vector<ObjectSegment> segment(const Frame& frame, const SegmentationResult& seg, const Pose& T_world_camera,
                                      FrameSegmentationStats* stats = nullptr) const;
+  /// Plain mask back-projection whatever segmentation_mode says (ObjectMapper::accumulate).
+  std::vector<ObjectSegment> backproject(const Frame& frame, const SegmentationResult& seg,
+                                         const Pose& T_world_camera) const;
 
  private:
+  std::vector<ObjectSegment> run(const Frame& frame, const SegmentationResult& seg, const Pose& T_world_camera,
+                                 bool backprojection, FrameSegmentationStats* stats) const;
   ObjectsConfig config_;
   CameraModel camera_;
 };

@@ -97,21 +97,52 @@ double ObjectMap::overlap(const std::vector<Eigen::Vector3f>& query, const Objec
   return static_cast<double>(hits) / static_cast<double>(query.size());
 }
 
+void ObjectMap::downsample(const ObjectSegment& segment, std::vector<Eigen::Vector3f>& points,
+                           std::vector<Rgb8>& colours) const {
+  std::unordered_map<uint64_t, char> seen;
+  seen.reserve(segment.points.size());
+  for (size_t i = 0; i < segment.points.size(); ++i) {
+    if (!seen.try_emplace(voxel_key(segment.points[i]), 1).second) continue;
+    points.push_back(segment.points[i]);
+    colours.push_back(i < segment.colours.size() ? segment.colours[i] : Rgb8{});
+  }
+}
+
+size_t ObjectMap::extend(const std::vector<ObjectSegment>& segments, size_t frame_index) {
+  size_t extended = 0;
+  for (const auto& segment : segments) {
+    if (segment.points.empty()) continue;
+    std::vector<Eigen::Vector3f> points;
+    std::vector<Rgb8> colours;
+    downsample(segment, points, colours);
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (const auto& p : points) sum += p.cast<double>();
+    const Eigen::Vector3f centroid = (sum / static_cast<double>(points.size())).cast<float>();
+    std::vector<std::pair<float, size_t>> candidates;
+    for (size_t j = 0; j < instances_.size(); ++j) {
+      if (instances_[j].class_id() != segment.class_id) continue;
+      const float d = (instances_[j].centroid() - centroid).norm();
+      if (d < config_.association_distance) candidates.emplace_back(d, j);
+    }
+    std::sort(candidates.begin(), candidates.end());
+    for (const auto& [d, j] : candidates) {
+      if (overlap(points, instances_[j], config_.overlap_distance) <= config_.overlap_ratio) continue;
+      add_points(instances_[j], points, colours);
+      instances_[j].last_frame = std::max(instances_[j].last_frame, frame_index);
+      ++extended;
+      break;
+    }
+  }
+  return extended;
+}
+
 void ObjectMap::associate(const std::vector<ObjectSegment>& segments, size_t frame_index, size_t step) {
   for (const auto& segment : segments) {
     if (segment.points.empty()) continue;
     // Downsample the segment to the map's voxels first: bounded cost per segment.
     std::vector<Eigen::Vector3f> points;
     std::vector<Rgb8> colours;
-    {
-      std::unordered_map<uint64_t, char> seen;
-      seen.reserve(segment.points.size());
-      for (size_t i = 0; i < segment.points.size(); ++i) {
-        if (!seen.try_emplace(voxel_key(segment.points[i]), 1).second) continue;
-        points.push_back(segment.points[i]);
-        colours.push_back(i < segment.colours.size() ? segment.colours[i] : Rgb8{});
-      }
-    }
+    downsample(segment, points, colours);
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (const auto& p : points) sum += p.cast<double>();
     const Eigen::Vector3f centroid = (sum / static_cast<double>(points.size())).cast<float>();

@@ -57,6 +57,11 @@ class ObjectMap {
 
   /// C4: associates each segment with the map (merge or create). `step` counts process() calls.
   void associate(const std::vector<ObjectSegment>& segments, size_t frame_index, size_t step);
+  /// Extension to C3 (accumulate_between_keyframes): each segment's points join the nearest
+  /// candidate instance of its class that passes the C4 overlap test; nothing is created and
+  /// no count (n, c, s, co-association) changes, so C5 still sees keyframes only.
+  /// Returns the number of segments whose points were added.
+  size_t extend(const std::vector<ObjectSegment>& segments, size_t frame_index);
   /// C5: promote / delete / merge, then reset association counts. `ignore_recency` drops the
   /// "seen recently" exemption (final pass).
   OptimisationStats optimise(size_t step, bool ignore_recency);
@@ -69,6 +74,8 @@ class ObjectMap {
 
  private:
   uint64_t voxel_key(const Eigen::Vector3f& p) const;
+  /// One point per map voxel of the segment (the first), with its colour.
+  void downsample(const ObjectSegment& segment, std::vector<Eigen::Vector3f>& points, std::vector<Rgb8>& colours) const;
   void add_points(ObjectInstance& instance, const std::vector<Eigen::Vector3f>& points, const std::vector<Rgb8>& colours);
   void merge_into(ObjectInstance& target, ObjectInstance& source);
 

@@ -33,6 +33,14 @@ void ObjectMapper::process(const Frame& frame, const SegmentationResult& segment
   ++timings_.frames;
 }
 
+void ObjectMapper::accumulate(const Frame& frame, const SegmentationResult& segmentation, const Pose& T_world_camera) {
+  if (!config_.accumulate_between_keyframes || map_.instances().empty()) return;
+  const auto t0 = std::chrono::steady_clock::now();
+  map_.extend(segmenter_.backproject(frame, segmentation, T_world_camera), frame.index);
+  timings_.accumulation_ms += ms_since(t0);
+  ++timings_.accumulated_frames;
+}
+
 void ObjectMapper::finish() {
   if (finished_) return;
   finished_ = true;

@@ -18,7 +18,9 @@ namespace semap {
 struct ObjectMapperTimings {
   double segmentation_ms = 0.0;  ///< C2, summed over process() calls
   double association_ms = 0.0;   ///< C4 + C5, summed
+  double accumulation_ms = 0.0;  ///< accumulate() calls, summed (back-projection + extend)
   size_t frames = 0;
+  size_t accumulated_frames = 0;
   size_t optimisations = 0;
 };
 
@@ -27,6 +29,11 @@ class ObjectMapper {
   ObjectMapper(const ObjectsConfig& config, const CameraModel& camera);
   /// One keyframe: C2 segments -> C4 association; C5 every optimise_every calls.
   void process(const Frame& frame, const SegmentationResult& segmentation, const Pose& T_world_camera);
+  /// A segmented frame that is not an object keyframe (config accumulate_between_keyframes;
+  /// a no-op when off): its masks, back-projected, add points to the instances they overlap
+  /// (ObjectMap::extend). The keyframes alone decide instances and counts (C2, C4, C5).
+  void accumulate(const Frame& frame, const SegmentationResult& segmentation, const Pose& T_world_camera);
+  bool accumulates() const { return config_.accumulate_between_keyframes; }
   /// Final C5 pass (config final_optimisation). Call once after the last frame.
   void finish();
   /// objects.json + objects/<id>.ply (schema in SHARED_FORMATS.md), written atomically.

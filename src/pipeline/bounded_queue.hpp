@@ -23,6 +23,15 @@ class BoundedQueue {
     not_empty_.notify_one();
     return true;
   }
+  /// Never blocks: false when the queue is full or closed (the item is then not taken).
+  bool try_push(T&& item) {
+    std::lock_guard lock(mutex_);
+    if (closed_ || items_.size() >= capacity_) return false;
+    items_.push_back(std::move(item));
+    high_water_ = std::max(high_water_, items_.size());
+    not_empty_.notify_one();
+    return true;
+  }
   /// Blocks until an item arrives; nullopt once closed and drained.
   std::optional<T> pop() {
     std::unique_lock lock(mutex_);

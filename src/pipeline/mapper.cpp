@@ -73,6 +73,7 @@ struct ObjectWork {
   Frame frame;
   SegmentationResult segmentation;
   Pose T_world_camera;
+  bool keyframe = true;  ///< false: a segmented frame between object keyframes (ObjectMapper::accumulate)
 };
 
 /// Labels of segmented frames, PNG-compressed in memory, so the final map refresh can
@@ -242,7 +243,7 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
                                  config.tracking.depth_repair_min_support};
 
   std::atomic<size_t> frames_done{0}, skipped_frames{0}, segmented_frames{0}, dropped_segmentations{0};
-  std::atomic<size_t> keyframes{0}, objects_processed{0}, objects_in_map{0};
+  std::atomic<size_t> keyframes{0}, objects_processed{0}, objects_in_map{0}, skipped_accumulations{0};
   Trajectory online_trajectory;
 
   // --- stage bodies -------------------------------------------------------------------
@@ -273,6 +274,11 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
   };
   auto map_objects = [&](ObjectWork& work) {
     const auto t0 = Clock::now();
+    if (!work.keyframe) {
+      objects.accumulate(work.frame, work.segmentation, work.T_world_camera);
+      timings.add("object_accumulate", ms_since(t0));
+      return;
+    }
     objects.process(work.frame, work.segmentation, work.T_world_camera);
     timings.add("object_map", ms_since(t0));
     ++objects_processed;
@@ -336,8 +342,8 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
           ++segmented_frames;
         }
         fuse(*item, seg);
-        if (seg && item->map_objects) {
-          ObjectWork work{std::move(item->frame), std::move(*seg), item->T_world_camera};
+        if (seg && (item->map_objects || objects.accumulates())) {
+          ObjectWork work{std::move(item->frame), std::move(*seg), item->T_world_camera, item->map_objects};
           map_objects(work);
         }
       }
@@ -379,7 +385,13 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
           auto result = block ? std::optional(seg_results.wait_take(it->first)) : seg_results.take(it->first);
           if (!result) { ++it; continue; }
           fuse(it->second, *result);
-          if (*result && it->second.map_objects) object_queue.push({std::move(it->second.frame), std::move(**result), it->second.T_world_camera});
+          if (*result && it->second.map_objects) {
+            object_queue.push({std::move(it->second.frame), std::move(**result), it->second.T_world_camera, true});
+          } else if (*result && objects.accumulates()) {
+            // Points between object keyframes are best effort: skipped when the object stage is busy.
+            if (!object_queue.try_push({std::move(it->second.frame), std::move(**result), it->second.T_world_camera, false}))
+              ++skipped_accumulations;
+          }
           it = waiting.erase(it);
         }
       };
@@ -551,6 +563,7 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
       {"segmented_frames", segmented_frames.load()},
       {"segmentations_dropped", dropped_segmentations.load()},
       {"object_frames", objects_processed.load()},
+      {"object_accumulations_skipped", skipped_accumulations.load()},
       {"objects", objects.instances().size()},
       {"poses", options.poses},
       {"segmenter", segmenter ? segmenter->name() : std::string("none")},

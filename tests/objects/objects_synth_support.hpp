@@ -83,13 +83,16 @@ struct MapRunResult {
 };
 
 /// Runs the object mapper over every `frame_step`-th frame with ground-truth poses; with
-/// `noise`, segmentation comes from apply_segmentation_noise (seed = frame index).
+/// `noise`, segmentation comes from apply_segmentation_noise (seed = frame index). The frames
+/// between go to ObjectMapper::accumulate (as the pipeline does when every frame is labelled)
+/// when config.accumulate_between_keyframes.
 inline MapRunResult run_object_mapper(const std::filesystem::path& dataset, const ObjectsConfig& config,
                                       const std::optional<SegmentationNoiseParams>& noise, int frame_step,
                                       const std::filesystem::path& write_to = {}) {
   const auto reader = open_dataset(dataset);
   ObjectMapper mapper(config, reader->camera());
-  for (size_t i = 0; i < reader->size(); i += frame_step) {
+  const size_t step = config.accumulate_between_keyframes ? 1 : static_cast<size_t>(frame_step);
+  for (size_t i = 0; i < reader->size(); i += step) {
     const Frame frame = reader->load(i);
     SegmentationResult seg;
     if (noise) {
@@ -98,7 +101,8 @@ inline MapRunResult run_object_mapper(const std::filesystem::path& dataset, cons
     } else {
       seg = segmentation_from_labels(frame.labels, frame.instances);
     }
-    mapper.process(frame, seg, *frame.gt_T_world_camera);
+    if (i % frame_step == 0) mapper.process(frame, seg, *frame.gt_T_world_camera);
+    else mapper.accumulate(frame, seg, *frame.gt_T_world_camera);
   }
   mapper.finish();
   if (!write_to.empty()) mapper.write(write_to);

@@ -177,6 +177,28 @@ TEST(ObjectsMap, AssociationMergesOrCreates) {
   EXPECT_GE(first.co_association.at(map.instances()[1].id), 1);
 }
 
+TEST(ObjectsMap, ExtendAddsPointsButNeverCreatesOrCounts) {
+  ObjectMap map(toy_config());
+  const ClassId cup = id(Label::kCup);
+  EXPECT_EQ(map.extend({cube_segment({0, 0, 0}, 0.1f, cup)}, 0), 0u);  // empty map: nothing created
+  EXPECT_TRUE(map.instances().empty());
+  map.associate({cube_segment({0, 0, 0}, 0.1f, cup)}, 0, 1);
+  const ObjectInstance before = map.instances()[0];
+  // The same cube grown by 1 cm: overlap > r, its new surface joins; n, c and s stay (C5 sees keyframes only).
+  EXPECT_EQ(map.extend({cube_segment({0, 0, 0}, 0.11f, cup)}, 7), 1u);
+  ASSERT_EQ(map.instances().size(), 1u);
+  const auto& after = map.instances()[0];
+  EXPECT_GT(after.points.size(), before.points.size());
+  EXPECT_EQ(after.n, before.n);
+  EXPECT_EQ(after.association_count, before.association_count);
+  EXPECT_EQ(after.score_sum, before.score_sum);
+  EXPECT_EQ(after.last_frame, 7u);
+  // Another class, or no overlap: dropped, never a new instance.
+  EXPECT_EQ(map.extend({cube_segment({0, 0, 0}, 0.1f, id(Label::kBottle))}, 8), 0u);
+  EXPECT_EQ(map.extend({cube_segment({0.3f, 0, 0}, 0.1f, cup)}, 9), 0u);
+  EXPECT_EQ(map.instances().size(), 1u);
+}
+
 TEST(ObjectsMap, DeletionRule) {
   ObjectsConfig c = toy_config();  // T = 50: delete when s + n < 5 and unseen for > 10 steps
   ObjectMap map(c);
