@@ -2,7 +2,7 @@
 // frame) on the same frames in one run, plus the effect of depth repair (A1) on ATE.
 // Prints one JSON object. Usage:
 //   bench_tracking [DATASET_DIR] [--frames N] [--no-open3d] [--no-repair-compare]
-//                  [--no-loop-compare] [--deterministic] [--out-trajectory FILE]
+//                  [--no-loop-compare] [--deterministic] [--out-trajectory FILE] [--threads N]
 //                  [--set "key: value"]... (tracking parameters, YAML, as in the tracking: section)
 #include <algorithm>
 #include <chrono>
@@ -11,6 +11,7 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgproc.hpp>
+#include <ctime>
 #include <string>
 #include <vector>
 
@@ -49,7 +50,9 @@ json run_ours(const std::vector<Frame>& frames, const CameraModel& camera, const
               const Trajectory& gt, Trajectory* out_traj) {
   Tracker tracker(config, camera);
   std::vector<double> ms;
+  TrackTimings sum;  // per-part means (issue 4 performance)
   size_t lost = 0, reloc = 0, prior = 0;
+  const std::clock_t cpu0 = std::clock();  // process CPU time, all threads
   const auto t0 = std::chrono::steady_clock::now();
   for (const auto& f : frames) {
     const TrackResult r = tracker.track(f);
@@ -59,11 +62,18 @@ json run_ours(const std::vector<Frame>& frames, const CameraModel& camera, const
                    r.ransac_inliers, int(r.used_motion_prior), r.icp_rmse, r.icp_overlap, r.timings.total_ms,
                    r.timings.repair_ms, r.timings.features_ms, r.timings.ransac_ms, r.timings.icp_ms, r.timings.keyframe_ms);
     ms.push_back(r.timings.total_ms);
+    sum.repair_ms += r.timings.repair_ms;
+    sum.features_ms += r.timings.features_ms;
+    sum.ransac_ms += r.timings.ransac_ms;
+    sum.icp_ms += r.timings.icp_ms;
+    sum.keyframe_ms += r.timings.keyframe_ms;
+    sum.total_ms += r.timings.total_ms;
     lost += r.status == TrackingStatus::lost;
     reloc += r.status == TrackingStatus::relocalised;
     prior += r.used_motion_prior;
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double cpu_ms = 1000.0 * double(std::clock() - cpu0) / CLOCKS_PER_SEC;
   const Trajectory odometry_view = tracker.trajectory();  // before the final optimisation
   const Trajectory traj = tracker.finish();
   const TrackerStats s = tracker.stats();
@@ -73,6 +83,10 @@ json run_ours(const std::vector<Frame>& frames, const CameraModel& camera, const
   j["fps_median"] = 1000.0 / std::max(1e-9, median(ms));
   j["fps_wall"] = frames.size() / wall;
   j["max_frame_ms"] = *std::max_element(ms.begin(), ms.end());
+  const double nf = double(std::max<size_t>(1, frames.size()));
+  j["mean_ms"] = {{"total", sum.total_ms / nf}, {"repair", sum.repair_ms / nf}, {"features", sum.features_ms / nf},
+                  {"ransac", sum.ransac_ms / nf}, {"icp", sum.icp_ms / nf}, {"keyframe", sum.keyframe_ms / nf}};
+  j["cpu_ms_per_frame"] = cpu_ms / nf;  // includes the loop-closure worker's share
   j["keyframes"] = s.keyframes;
   j["keyframe_reuses"] = s.keyframe_reuses;
   j["loop_edges"] = s.loop_edges;
@@ -111,6 +125,7 @@ int main(int argc, char** argv) {
       else if (a == "--no-loop-compare") loop_compare = false;
       else if (a == "--deterministic") deterministic = true;
       else if (a == "--verbose") verbose = true;
+      else if (a == "--threads" && i + 1 < argc) cv::setNumThreads(std::stoi(argv[++i]));  // OpenCV/TBB workers
       else if (a == "--out-trajectory" && i + 1 < argc) out_trajectory = argv[++i];
       else if (a == "--set" && i + 1 < argc) overrides.push_back(argv[++i]);
       else if (!a.empty() && a[0] != '-') dataset = a;

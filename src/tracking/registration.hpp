@@ -56,26 +56,39 @@ std::vector<std::pair<int, int>> match_features(const FrameFeatures& query, cons
 struct DepthLevel {
   PinholeIntrinsics intrinsics;
   cv::Mat vertices;   ///< CV_32FC3, NaN where invalid
-  cv::Mat normals;    ///< CV_32FC3, NaN where invalid (only computed when requested)
+  cv::Mat normals;    ///< CV_32FC3, NaN where invalid (empty when not requested / not needed)
   cv::Mat intensity;  ///< CV_32FC1 in [0, 1], empty unless a grey image was given
-  cv::Mat grad_x, grad_y;  ///< CV_32FC1 intensity derivatives per pixel (central differences)
+  /// CV_32FC3 (I, dI/dx, dI/dy) per pixel (central differences), the target side of the
+  /// photometric term packed for one bilinear fetch; empty in a source-only pyramid.
+  cv::Mat intensity_gradients;
 };
 /// Coarse-to-fine depth pyramid (level 0 = input). Depth outside [min, max] is invalid;
 /// downsampling averages the valid pixels of each 2x2 block that agree with its first valid one.
 /// With `gray` (CV_8UC1, the depth's size, registered) every level also gets the intensity,
 /// blurred lightly (Gaussian sigma 1 px, against motion blur and noise) and area-downsampled
 /// like the depth, with its gradients.
+/// `source_only`: only what the ICP reads from its source (vertices, intensity, the normals of
+/// the normal gate at coarse levels); complete_target_pyramid() adds the rest if the frame
+/// later becomes a target (keyframe). Saves the per-frame cost (METHODS.md A2 step 4).
 std::vector<DepthLevel> build_depth_pyramid(const cv::Mat& depth, const PinholeIntrinsics& intrinsics, int levels,
                                             double min_depth, double max_depth, bool with_normals,
-                                            const cv::Mat& gray = cv::Mat());
+                                            const cv::Mat& gray = cv::Mat(), bool source_only = false);
+/// Adds the target-side data a source-only pyramid lacks (normals at every level when
+/// `with_normals`, intensity gradients). No-op on a full pyramid.
+void complete_target_pyramid(std::vector<DepthLevel>& pyramid, bool with_normals);
+/// Whether the ICP reads the source normals of this level (normal gate; the 1-pixel Kinect
+/// normals at full resolution are too noisy to gate with).
+inline bool icp_uses_source_normals(const DepthLevel& level) { return level.vertices.cols < 640; }
 
 struct IcpParams {
   std::vector<int> iterations = {4, 6, 10};  ///< per level, level 0 first
-  int stride = 2;                  ///< source pixel step at level 0 (1 at coarser levels)
+  int stride = 2;                  ///< source pixel step at level 0, halved per level up
+  int min_stride = 1;              ///< lower bound of the step at the coarser levels (level >= 1)
   double max_distance = 0.10;      ///< metres at level 0, doubled per level up
   double max_normal_angle_deg = 35.0;
   double huber_delta = 0.01;       ///< metres
-  double convergence_update = 1e-5;
+  double convergence_update = 1e-5;  ///< stop level 0 when |update| falls below (rad, m)
+  double convergence_level_scale = 1.0;  ///< level l stops below convergence_update * scale^l
   double converged_update = 2e-3;  ///< last update above this = not converged
   /// Photometric term (joint geometric + photometric ICP as in ElasticFusion / Open3D's hybrid
   /// odometry): weight of the squared intensity residual relative to the squared point-to-plane

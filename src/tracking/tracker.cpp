@@ -17,6 +17,7 @@
 #include "core/error.hpp"
 #include "tracking/depth_repair.hpp"
 #include "tracking/ferns.hpp"
+#include "tracking/parallel.hpp"
 #include "tracking/pose_graph.hpp"
 #include "tracking/registration.hpp"
 
@@ -110,10 +111,12 @@ struct Tracker::Impl {
     for (int l = 2; l < cfg.icp_levels; ++l) icp_params.iterations.push_back(cfg.icp_iterations_coarse);
     icp_params.iterations.resize(cfg.icp_levels);
     icp_params.stride = cfg.icp_stride;
+    icp_params.min_stride = cfg.icp_min_stride;
     icp_params.max_distance = cfg.icp_max_distance;
     icp_params.max_normal_angle_deg = cfg.icp_max_normal_angle_deg;
     icp_params.huber_delta = cfg.icp_huber_delta;
     icp_params.convergence_update = cfg.icp_convergence_update;
+    icp_params.convergence_level_scale = cfg.icp_convergence_level_scale;
     icp_params.converged_update = cfg.icp_converged_update;
     icp_params.photometric_weight = cfg.icp_photometric_weight;
     icp_params.photometric_huber = cfg.icp_photometric_huber;
@@ -145,9 +148,11 @@ struct Tracker::Impl {
     if (worker.joinable()) worker.join();
   }
 
-  std::vector<DepthLevel> pyramid(const cv::Mat& depth, const cv::Mat& gray) const {
+  /// Keyframe (ICP target) pyramid; `source_only` for a tracked frame (completed by
+  /// make_keyframe if it becomes one; METHODS.md A2 step 4).
+  std::vector<DepthLevel> pyramid(const cv::Mat& depth, const cv::Mat& gray, bool source_only = false) const {
     return build_depth_pyramid(depth, intr, cfg.icp_levels, cfg.min_depth, cfg.max_depth, true,
-                               cfg.icp_photometric_weight > 0 ? gray : cv::Mat());
+                               cfg.icp_photometric_weight > 0 ? gray : cv::Mat(), source_only);
   }
 
   bool icp_acceptable(const IcpResult& icp, double max_rmse, double min_overlap) const {
@@ -245,6 +250,7 @@ struct Tracker::Impl {
   /// Looks for a loop from keyframe `id` to older keyframes through the ferns, verifies it
   /// geometrically (A2) and optimises the pose graph when one is found.
   void process_keyframe(int id) {
+    const tracking_detail::SerialScope serial(!cfg.parallel);
     std::shared_ptr<const Keyframe> kf;
     std::vector<std::pair<double, std::shared_ptr<const Keyframe>>> candidates;
     {
@@ -262,7 +268,7 @@ struct Tracker::Impl {
                      [](const auto& a, const auto& b) { return a.first > b.first; });
     if (int(candidates.size()) > cfg.loop_candidates) candidates.resize(cfg.loop_candidates);
     if (candidates.empty()) return;
-    const auto kf_pyramid = pyramid(kf->depth, kf->gray);
+    const auto kf_pyramid = pyramid(kf->depth, kf->gray, /*source_only=*/true);  // registered as the source
     bool added = false;
     for (const auto& [sim, other] : candidates) {
       const auto other_pyramid = pyramid(other->depth, other->gray);
@@ -306,6 +312,7 @@ struct Tracker::Impl {
   // --- per-frame path ---
   TrackResult track(const Frame& frame) {
     const auto t_start = Clock::now();
+    const tracking_detail::SerialScope serial(!cfg.parallel);
     if (frame.depth.empty() || frame.depth.type() != CV_32FC1)
       throw Error(frame.depth_path.empty() ? "Tracker::track" : frame.depth_path, "depth must be CV_32FC1 metres");
     if (frame.rgb.empty() || frame.rgb.type() != CV_8UC3)
@@ -332,7 +339,7 @@ struct Tracker::Impl {
 
     t0 = Clock::now();
     FrameFeatures features = extract_features(*orb, gray, depth, intr, cfg.min_depth, cfg.max_depth);
-    std::vector<DepthLevel> frame_pyramid = pyramid(depth, gray);
+    std::vector<DepthLevel> frame_pyramid = pyramid(depth, gray, /*source_only=*/true);
     result.timings.features_ms = ms_since(t0);
 
     if (reference < 0) {  // first frame: world = its camera
@@ -398,11 +405,16 @@ struct Tracker::Impl {
       }
       result.timings.icp_ms += ms_since(t_icp);
     }
-    FernCode code = ferns.encode(rgb, depth);
+    // Fern code only when used (relocalisation, keyframes, dissimilarity test): not per frame.
+    FernCode code;
+    auto fern_code = [&]() -> const FernCode& {
+      if (code.empty()) code = ferns.encode(rgb, depth);
+      return code;
+    };
     t0 = Clock::now();
     TrackingStatus status = TrackingStatus::ok;
     if (!ok) {
-      if (relocalise(features, frame_pyramid, code, reg)) {
+      if (relocalise(features, frame_pyramid, fern_code(), reg)) {
         status = TrackingStatus::relocalised;
         ok = true;
         std::lock_guard<std::mutex> lock(mutex);
@@ -439,7 +451,8 @@ struct Tracker::Impl {
                      deg(rotation_angle(T_ref_frame)) > cfg.keyframe_rotation_deg ||
                      reg.icp.overlap < cfg.keyframe_min_overlap;
     bool dissimilar = false;
-    if (!far) {
+    if (!far && cfg.fern_new_keyframe_similarity > 0) {  // similarity >= 0 always: test off at 0
+      fern_code();
       std::lock_guard<std::mutex> lock(mutex);
       dissimilar = ferns.max_similarity(code) < cfg.fern_new_keyframe_similarity;
     }
@@ -450,6 +463,7 @@ struct Tracker::Impl {
         T_world_frame = kf_pose.at(reference) * T_ref_frame;
       }
       if (!(cfg.keyframe_reuse && reuse_keyframe(features, frame_pyramid, T_world_frame, reg, T_ref_frame))) {
+        fern_code();
         make_keyframe(frame, depth, gray, std::move(features), std::move(code), std::move(frame_pyramid), reference,
                       T_ref_frame, reg.icp);
         result.is_keyframe = true;
@@ -509,6 +523,7 @@ struct Tracker::Impl {
     }
     reference = id;
     ref_pyramid = std::move(frame_pyramid);
+    complete_target_pyramid(ref_pyramid, true);
     submit_keyframe(id);
   }
 

@@ -33,10 +33,12 @@ struct TrackingConfig {
   int icp_iterations_mid = 6;          ///< at level 1
   int icp_iterations_coarse = 10;      ///< at levels >= 2
   int icp_stride = 4;                  ///< pixel step over the source image at level 0 (halved per level)
+  int icp_min_stride = 2;              ///< the halved step never goes below this at levels >= 1 (2: a quarter of the coarsest level's pixels, same ATE, METHODS.md A2)
   double icp_max_distance = 0.10;      ///< correspondence distance gate at level 0, metres (x2 per level up)
   double icp_max_normal_angle_deg = 35.0;  ///< normal compatibility gate, degrees
   double icp_huber_delta = 0.01;       ///< Huber threshold of the point-to-plane residual, metres
-  double icp_convergence_update = 1e-5;  ///< stop a level when |update| falls below, (rad, m)
+  double icp_convergence_update = 5e-4;  ///< stop level 0 when |update| falls below (rad, m); the Huber/association noise floor is 3-7e-4, 1e-5 only ran iterations to the cap (same ATE; 1e-3 loses 0.5 cm on fr1_rpy)
+  double icp_convergence_level_scale = 2.0;  ///< level l stops below icp_convergence_update * scale^l (coarse pixels resolve less)
   double icp_converged_update = 2e-3;  ///< last update above this = ICP not converged (tracking loss), (rad, m)
   double icp_photometric_weight = 0.3;  ///< weight of the intensity residual against the point-to-plane one, m^2 (0 = geometry only): (sigma_geo / sigma_I)^2 with sigma_geo ~ 1 cm, sigma_I ~ 5 grey levels
   double icp_photometric_huber = 0.1;   ///< Huber threshold of the intensity residual (intensity 0..1)
@@ -77,6 +79,7 @@ struct TrackingConfig {
   double information_effective_points = 300.0;  ///< ICP matches are correlated: Hessian rescaled to this many independent points
   double information_min_sigma = 0.003;  ///< floor on the registration noise used for edge information, metres
   bool background_loop_closure = true; ///< loop detection + optimisation on a worker thread (false = deterministic)
+  bool parallel = false;               ///< row-parallel loops (cv::parallel_for_) inside tracking; off: serial, less CPU per frame when the pipeline shares the cores (OpenCV's own calls are unaffected)
 
   void visit(ParamVisitor& v) {
     v.param("depth_repair", depth_repair, "", "fill invalid depth with the joint median filter (A1)");
@@ -100,10 +103,12 @@ struct TrackingConfig {
     v.param("icp_iterations_mid", icp_iterations_mid, "", "ICP iterations at half resolution");
     v.param("icp_iterations_coarse", icp_iterations_coarse, "", "ICP iterations at coarser levels");
     v.param("icp_stride", icp_stride, "px", "source pixel step at full resolution");
+    v.param("icp_min_stride", icp_min_stride, "px", "smallest source pixel step at the coarser levels");
     v.param("icp_max_distance", icp_max_distance, "m", "correspondence gate at full resolution (doubles per level)");
     v.param("icp_max_normal_angle_deg", icp_max_normal_angle_deg, "deg", "normal compatibility gate");
     v.param("icp_huber_delta", icp_huber_delta, "m", "Huber threshold on point-to-plane residuals");
     v.param("icp_convergence_update", icp_convergence_update, "rad|m", "update norm that ends a level");
+    v.param("icp_convergence_level_scale", icp_convergence_level_scale, "", "stop threshold factor per pyramid level up");
     v.param("icp_converged_update", icp_converged_update, "rad|m", "final update above this = ICP not converged");
     v.param("icp_photometric_weight", icp_photometric_weight, "m^2", "joint ICP: weight of intensity residuals vs point-to-plane residuals (0 = off)");
     v.param("icp_photometric_huber", icp_photometric_huber, "", "Huber threshold of intensity residuals (0..1)");
@@ -136,6 +141,7 @@ struct TrackingConfig {
     v.param("information_effective_points", information_effective_points, "", "independent points assumed for edge information");
     v.param("information_min_sigma", information_min_sigma, "m", "noise floor for edge information");
     v.param("background_loop_closure", background_loop_closure, "", "loop closure on a worker thread (false = deterministic)");
+    v.param("parallel", parallel, "", "row-parallel loops inside tracking (false = serial, less CPU per frame)");
   }
   void validate() const {
     require_param(depth_repair_radius >= 1 && depth_repair_radius <= 15, "tracking.depth_repair_radius", "must be in [1, 15]");
@@ -153,8 +159,10 @@ struct TrackingConfig {
     require_param(icp_iterations_fine >= 0 && icp_iterations_mid >= 0 && icp_iterations_coarse >= 0,
                   "tracking.icp_iterations_fine", "iterations must be >= 0");
     require_param(icp_stride >= 1 && icp_stride <= 8, "tracking.icp_stride", "must be in [1, 8]");
+    require_param(icp_min_stride >= 1 && icp_min_stride <= 8, "tracking.icp_min_stride", "must be in [1, 8]");
     require_param(icp_max_distance > 0, "tracking.icp_max_distance", "must be > 0");
     require_param(icp_max_normal_angle_deg > 0 && icp_max_normal_angle_deg <= 90, "tracking.icp_max_normal_angle_deg", "must be in (0, 90]");
+    require_param(icp_convergence_level_scale >= 1, "tracking.icp_convergence_level_scale", "must be >= 1");
     require_param(icp_huber_delta > 0, "tracking.icp_huber_delta", "must be > 0");
     require_param(icp_photometric_weight >= 0, "tracking.icp_photometric_weight", "must be >= 0");
     require_param(icp_photometric_huber > 0, "tracking.icp_photometric_huber", "must be > 0");

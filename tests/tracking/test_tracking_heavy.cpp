@@ -2,8 +2,8 @@
 // and lower than Open3D's hybrid RGB-D odometry on the same frames), 7-Scenes redkitchen 500
 // frames (ATE <= 4 cm) and a synthetic closed loop with depth noise (ATE <= 1 cm, loop closure
 // lowers ATE against odometry alone).
-// Measured (2 shared cores, deterministic): TUM 2.0 cm (Open3D 6.4 cm), redkitchen 3.4 cm,
-// synthetic 0.19 cm with loop closure vs 0.82 cm odometry only.
+// Measured (2 shared cores, deterministic): TUM 2.0 cm (Open3D 6.4 cm), redkitchen 3.45 cm,
+// synthetic 0.20 cm with loop closure vs 0.85 cm odometry only.
 #include <gtest/gtest.h>
 
 #include "bench/open3d_odometry.hpp"

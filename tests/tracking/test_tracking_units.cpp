@@ -136,6 +136,61 @@ TEST(PointToPlaneIcp, RecoversKnownMotionCoarseToFine) {
   EXPECT_GT(translation_error(Pose::Identity(), truth), 0.09);
 }
 
+// The one-scan matcher (METHODS.md A2 step 1) must give what cv::BFMatcher gives: 2-NN ratio
+// test, Hamming limit and mutual cross-check.
+TEST(FeatureMatching, OneScanMatcherAgreesWithBFMatcher) {
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> byte(0, 255), flip(0, 255);
+  FrameFeatures a, b;
+  a.descriptors.create(300, 32, CV_8U);
+  b.descriptors.create(280, 32, CV_8U);
+  for (int r = 0; r < b.descriptors.rows; ++r)
+    for (int c = 0; c < 32; ++c) b.descriptors.at<uint8_t>(r, c) = uint8_t(byte(rng));
+  for (int r = 0; r < a.descriptors.rows; ++r)
+    for (int c = 0; c < 32; ++c)  // first 200 rows: noisy copies of b's rows, the rest random
+      a.descriptors.at<uint8_t>(r, c) = r < 200 ? uint8_t(b.descriptors.at<uint8_t>(r, c) ^ (flip(rng) < 20 ? 1 << (c % 8) : 0))
+                                                : uint8_t(byte(rng));
+  const auto pairs = match_features(a, b, 0.8, 64);
+  cv::BFMatcher matcher(cv::NORM_HAMMING, false);
+  std::vector<std::vector<cv::DMatch>> forward;
+  matcher.knnMatch(a.descriptors, b.descriptors, forward, 2);
+  std::vector<cv::DMatch> backward;
+  matcher.match(b.descriptors, a.descriptors, backward);
+  std::vector<std::pair<int, int>> expected;
+  for (const auto& knn : forward) {
+    const cv::DMatch& m = knn[0];
+    if (m.distance > 64 || m.distance > 0.8 * knn[1].distance || backward[m.trainIdx].trainIdx != m.queryIdx) continue;
+    expected.emplace_back(m.queryIdx, m.trainIdx);
+  }
+  EXPECT_EQ(pairs, expected);
+  EXPECT_GE(pairs.size(), 190u);
+}
+
+// A source-only pyramid completed for use as a target equals the full pyramid.
+TEST(PointToPlaneIcp, CompletedSourcePyramidEqualsFullPyramid) {
+  PinholeIntrinsics k;
+  const cv::Mat depth = render_room(k, make_pose(0.02, 0.01, 0, 0.03, 0, 0));
+  cv::Mat gray(depth.size(), CV_8UC1);
+  cv::randu(gray, 0, 255);
+  const auto full = build_depth_pyramid(depth, k, 3, 0.1, 10.0, true, gray);
+  auto partial = build_depth_pyramid(depth, k, 3, 0.1, 10.0, true, gray, /*source_only=*/true);
+  EXPECT_TRUE(partial[0].normals.empty());
+  EXPECT_TRUE(partial[0].intensity_gradients.empty());
+  complete_target_pyramid(partial, true);
+  auto same = [](const cv::Mat& x, const cv::Mat& y) {  // NaN-aware
+    cv::Mat xs = x.clone(), ys = y.clone();
+    cv::patchNaNs(xs, -7.0);
+    cv::patchNaNs(ys, -7.0);
+    return cv::norm(xs.reshape(1), ys.reshape(1), cv::NORM_INF) == 0.0;
+  };
+  for (size_t l = 0; l < full.size(); ++l) {
+    EXPECT_TRUE(same(full[l].vertices, partial[l].vertices)) << l;
+    EXPECT_TRUE(same(full[l].normals, partial[l].normals)) << l;
+    EXPECT_TRUE(same(full[l].intensity, partial[l].intensity)) << l;
+    EXPECT_TRUE(same(full[l].intensity_gradients, partial[l].intensity_gradients)) << l;
+  }
+}
+
 // A textured wall seen head-on: sliding along it leaves the point-to-plane cost flat, only the
 // photometric term (joint ICP) sees the motion.
 TEST(PointToPlaneIcp, PhotometricTermRecoversSlidingAlongTexturedPlane) {
