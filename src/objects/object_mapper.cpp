@@ -2,6 +2,9 @@
 
 #include <Eigen/Eigenvalues>
 #include <chrono>
+#include <tuple>
+#include <algorithm>
+#include <unordered_map>
 
 #include "core/error.hpp"
 #include "core/paths.hpp"
@@ -50,7 +53,18 @@ void ObjectMapper::finish() {
   }
 }
 
-OrientedBox fit_oriented_box(const std::vector<Eigen::Vector3f>& points) {
+namespace {
+/// The values at the trim_fraction and 1 - trim_fraction quantiles (exact min / max at 0).
+std::pair<double, double> trimmed_range(std::vector<double>& v, double trim_fraction) {
+  const size_t n = v.size(), k = std::min(n - 1, static_cast<size_t>(trim_fraction * static_cast<double>(n)));
+  std::nth_element(v.begin(), v.begin() + k, v.end());
+  const double lo = v[k];
+  std::nth_element(v.begin(), v.begin() + (n - 1 - k), v.end());
+  return {lo, v[n - 1 - k]};
+}
+}  // namespace
+
+OrientedBox fit_oriented_box(const std::vector<Eigen::Vector3f>& points, double trim_fraction) {
   OrientedBox box;
   if (points.empty()) return box;
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
@@ -64,16 +78,62 @@ OrientedBox fit_oriented_box(const std::vector<Eigen::Vector3f>& points) {
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(cov);
   Eigen::Matrix3d axes = solver.eigenvectors();
   if (axes.determinant() < 0) axes.col(0) = -axes.col(0);
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e30), hi = -lo;
-  for (const auto& p : points) {
-    const Eigen::Vector3d local = axes.transpose() * (p.cast<double>() - mean);
-    lo = lo.cwiseMin(local);
-    hi = hi.cwiseMax(local);
+  Eigen::Vector3d lo, hi;
+  std::vector<double> coordinate(points.size());
+  for (int a = 0; a < 3; ++a) {
+    for (size_t i = 0; i < points.size(); ++i) coordinate[i] = axes.col(a).dot(points[i].cast<double>() - mean);
+    std::tie(lo[a], hi[a]) = trimmed_range(coordinate, trim_fraction);
   }
   box.rotation = axes.cast<float>();
   box.extent = (hi - lo).cast<float>();
   box.center = (mean + axes * (0.5 * (lo + hi))).cast<float>();
   return box;
+}
+
+std::vector<Eigen::Vector3f> largest_cluster(const std::vector<Eigen::Vector3f>& points, double link_distance) {
+  if (!(link_distance > 0) || points.size() < 2) return points;
+  // Connected components of occupied cells (26-neighbourhood), then the points of the largest.
+  auto key = [](const Eigen::Vector3i& c) {
+    return (static_cast<uint64_t>(c.x() + (1 << 20)) << 42) | (static_cast<uint64_t>(c.y() + (1 << 20)) << 21) |
+           static_cast<uint64_t>(c.z() + (1 << 20));
+  };
+  std::vector<Eigen::Vector3i> cell_of(points.size());
+  std::unordered_map<uint64_t, int> component;  // cell -> component (-1 = not yet visited)
+  for (size_t i = 0; i < points.size(); ++i) {
+    cell_of[i] = (points[i].cast<double>() / link_distance).array().floor().cast<int>();
+    component.emplace(key(cell_of[i]), -1);
+  }
+  std::vector<size_t> cells_per_component;
+  std::vector<Eigen::Vector3i> stack;
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (component[key(cell_of[i])] >= 0) continue;
+    const int id = static_cast<int>(cells_per_component.size());
+    cells_per_component.push_back(0);
+    component[key(cell_of[i])] = id;
+    stack.assign(1, cell_of[i]);
+    while (!stack.empty()) {
+      const Eigen::Vector3i c = stack.back();
+      stack.pop_back();
+      ++cells_per_component[id];
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) {
+            const auto it = component.find(key(c + Eigen::Vector3i(dx, dy, dz)));
+            if (it == component.end() || it->second >= 0) continue;
+            it->second = id;
+            stack.push_back(c + Eigen::Vector3i(dx, dy, dz));
+          }
+    }
+  }
+  std::vector<size_t> points_per_component(cells_per_component.size(), 0);
+  for (size_t i = 0; i < points.size(); ++i) ++points_per_component[component[key(cell_of[i])]];
+  const int best = static_cast<int>(std::max_element(points_per_component.begin(), points_per_component.end()) -
+                                    points_per_component.begin());
+  std::vector<Eigen::Vector3f> out;
+  out.reserve(points_per_component[best]);
+  for (size_t i = 0; i < points.size(); ++i)
+    if (component[key(cell_of[i])] == best) out.push_back(points[i]);
+  return out;
 }
 
 nlohmann::json ObjectMapper::to_json() const {
@@ -89,12 +149,17 @@ nlohmann::json ObjectMapper::to_json() const {
       const std::string other(class_name(id(Label::kOther)));
       distribution[other] = distribution.value(other, 0.0) + mean[0];
     }
-    Eigen::Vector3f lo = Eigen::Vector3f::Constant(1e30f), hi = -lo;
-    for (const auto& p : inst.points) {
-      lo = lo.cwiseMin(p);
-      hi = hi.cwiseMax(p);
+    // Boxes describe the object's body: its largest cluster, trimmed of stray points.
+    const std::vector<Eigen::Vector3f> body = largest_cluster(inst.points, config_.box_cluster_distance);
+    Eigen::Vector3f lo, hi;
+    std::vector<double> coordinate(body.size());
+    for (int a = 0; a < 3; ++a) {
+      for (size_t i = 0; i < body.size(); ++i) coordinate[i] = body[i][a];
+      const auto [l, h] = trimmed_range(coordinate, config_.box_trim_fraction);
+      lo[a] = static_cast<float>(l);
+      hi[a] = static_cast<float>(h);
     }
-    const OrientedBox obb = fit_oriented_box(inst.points);
+    const OrientedBox obb = fit_oriented_box(body, config_.box_trim_fraction);
     std::vector<float> rotation;
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) rotation.push_back(obb.rotation(r, c));

@@ -56,6 +56,8 @@ struct ObjectsConfig {
   bool absorb_fragments = true;     ///< extension: a deleted instance's points join a stable same-class instance it overlaps (C5 tests 3, 4)
   bool final_optimisation = true;   ///< finish() runs one more optimisation, ignoring recency
   bool accumulate_between_keyframes = true;  ///< extension to C3: ObjectMapper::accumulate() adds the masks' points of non-keyframes to matching instances
+  double box_cluster_distance = 0.05;  ///< exported boxes: points of the largest cluster with this linking distance (m, 0 = all points)
+  double box_trim_fraction = 0.01;     ///< exported boxes: this fraction of the points is ignored at each end of every axis
 
   void visit(ParamVisitor& v) {
     v.param("segmentation_mode", segmentation_mode, "", "supervoxel (C2 guided clustering) or backprojection (masks only)");
@@ -102,8 +104,12 @@ struct ObjectsConfig {
     v.param("absorb_fragments", absorb_fragments, "", "extension to C5: points of a deleted instance overlapping a stable one of its class join it");
     v.param("final_optimisation", final_optimisation, "", "finish() optimises once more, ignoring recency");
     v.param("accumulate_between_keyframes", accumulate_between_keyframes, "", "extension to C3: segmented frames between object keyframes add their mask points to instances they overlap (never create, never count)");
+    v.param("box_cluster_distance", box_cluster_distance, "m", "exported boxes enclose the largest cluster of the instance's points linked within this distance (0 = all points)");
+    v.param("box_trim_fraction", box_trim_fraction, "", "exported boxes ignore this fraction of the points at each end of every axis (stray depth-edge points)");
   }
   void validate() const {
+    require_param(box_cluster_distance >= 0, "objects.box_cluster_distance", "must be >= 0");
+    require_param(box_trim_fraction >= 0 && box_trim_fraction < 0.5, "objects.box_trim_fraction", "must be in [0, 0.5)");
     require_param(segmentation_mode == "supervoxel" || segmentation_mode == "backprojection",
                   "objects.segmentation_mode", "must be supervoxel or backprojection");
     require_param(pixel_stride >= 1, "objects.pixel_stride", "must be >= 1");

@@ -7,6 +7,7 @@
 
 #include "objects/frame_segmenter.hpp"
 #include "objects/object_map.hpp"
+#include "objects/object_mapper.hpp"
 #include "objects/segment_graph.hpp"
 
 using namespace semap;
@@ -293,6 +294,28 @@ TEST(ObjectsMap, MergeRuleNeedsCoAssociationOverlapAndSimilarLabels) {
     ASSERT_EQ(map.instances().size(), 2u);
     EXPECT_EQ(map.optimise(50, false).merged, 0);
   }
+}
+
+// Exported boxes describe the object's body: a separate cluster of points that bled in across a
+// depth edge (here a wall patch 1 m away) and a few stray points do not stretch them.
+TEST(ObjectsBoxes, LargestClusterAndTrimmedExtents) {
+  std::vector<Eigen::Vector3f> points;
+  for (float x = 0; x <= 0.6f; x += 0.01f)
+    for (float y = 0; y <= 0.4f; y += 0.01f) points.emplace_back(x, y, 0.75f);  // table top 0.6 x 0.4
+  for (float y = 0; y <= 0.3f; y += 0.01f)
+    for (float z = 0; z <= 0.3f; z += 0.01f) points.emplace_back(1.6f, y, z);  // wall patch, 1 m off
+  const auto body = largest_cluster(points, 0.05);
+  EXPECT_EQ(body.size(), 61u * 41u);
+  for (const auto& p : body) EXPECT_FLOAT_EQ(p.z(), 0.75f);
+  EXPECT_EQ(largest_cluster(points, 0.0).size(), points.size());  // 0: all points
+
+  std::vector<Eigen::Vector3f> with_strays = body;
+  for (int k = 0; k < 5; ++k) with_strays.emplace_back(0.3f, 0.2f, 0.75f - 0.4f * static_cast<float>(k + 1));
+  const OrientedBox exact = fit_oriented_box(with_strays), trimmed = fit_oriented_box(with_strays, 0.01);
+  const Eigen::Vector3f e = trimmed.extent;
+  EXPECT_GT(exact.extent.maxCoeff(), 1.9f);  // the strays reach 2 m below the top
+  EXPECT_NEAR(e.maxCoeff(), 0.6f, 0.03f);
+  EXPECT_LT(e.minCoeff(), 0.01f);  // a flat top
 }
 
 TEST(ObjectsMap, InstanceIdsForPoints) {
