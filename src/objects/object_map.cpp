@@ -72,7 +72,7 @@ uint64_t ObjectMap::voxel_key(const Eigen::Vector3f& p) const {
 }
 
 void ObjectMap::add_points(ObjectInstance& instance, const std::vector<Eigen::Vector3f>& points,
-                           const std::vector<Rgb8>& colours) {
+                           const std::vector<Rgb8>& colours, const std::vector<uint32_t>& frames) {
   bool added = false;
   for (size_t i = 0; i < points.size(); ++i) {
     const auto [it, inserted] = instance.voxel_to_point.try_emplace(voxel_key(points[i]),
@@ -80,6 +80,7 @@ void ObjectMap::add_points(ObjectInstance& instance, const std::vector<Eigen::Ve
     if (!inserted) continue;
     instance.points.push_back(points[i]);
     instance.colours.push_back(i < colours.size() ? colours[i] : Rgb8{});
+    instance.point_frames.push_back(frames.size() == points.size() ? frames[i] : (frames.empty() ? 0u : frames[0]));
     instance.point_sum += points[i].cast<double>();
     added = true;
   }
@@ -127,7 +128,7 @@ size_t ObjectMap::extend(const std::vector<ObjectSegment>& segments, size_t fram
     std::sort(candidates.begin(), candidates.end());
     for (const auto& [d, j] : candidates) {
       if (overlap(points, instances_[j], config_.overlap_distance) <= config_.overlap_ratio) continue;
-      add_points(instances_[j], points, colours);
+      add_points(instances_[j], points, colours, {static_cast<uint32_t>(frame_index)});
       instances_[j].last_frame = std::max(instances_[j].last_frame, frame_index);
       ++extended;
       break;
@@ -199,7 +200,7 @@ void ObjectMap::associate(const std::vector<ObjectSegment>& segments, size_t fra
       }
     }
     ObjectInstance& inst = instances_[target];
-    add_points(inst, points, colours);
+    add_points(inst, points, colours, {static_cast<uint32_t>(frame_index)});
     inst.n += 1;
     for (size_t k = 0; k < inst.score_sum.size() && k < segment.class_scores.size(); ++k)
       inst.score_sum[k] += segment.class_scores[k];
@@ -218,8 +219,27 @@ void ObjectMap::associate(const std::vector<ObjectSegment>& segments, size_t fra
   }
 }
 
+void ObjectMap::apply_pose_corrections(const std::unordered_map<uint32_t, Eigen::Isometry3f>& corrections) {
+  for (auto& inst : instances_) {
+    std::vector<Eigen::Vector3f> points = std::move(inst.points);
+    std::vector<Rgb8> colours = std::move(inst.colours);
+    std::vector<uint32_t> frames = std::move(inst.point_frames);
+    inst.points.clear();
+    inst.colours.clear();
+    inst.point_frames.clear();
+    inst.voxel_to_point.clear();
+    inst.point_sum.setZero();
+    for (size_t i = 0; i < points.size(); ++i) {
+      const auto it = corrections.find(frames[i]);
+      if (it != corrections.end()) points[i] = it->second * points[i];
+    }
+    add_points(inst, points, colours, frames);
+    inst.tree.reset();
+  }
+}
+
 void ObjectMap::merge_into(ObjectInstance& target, ObjectInstance& source) {
-  add_points(target, source.points, source.colours);
+  add_points(target, source.points, source.colours, source.point_frames);
   target.n += source.n;
   for (size_t k = 0; k < target.score_sum.size(); ++k) target.score_sum[k] += source.score_sum[k];
   target.association_count = std::max(target.association_count, source.association_count);
@@ -265,7 +285,7 @@ OptimisationStats ObjectMap::optimise(size_t step, bool ignore_recency) {
         if (best < instances_.size()) {
           // Only the points: the fragment's counts are those of a rejected instance (C5 keeps
           // the target's class evidence as it was).
-          add_points(instances_[best], inst.points, inst.colours);
+          add_points(instances_[best], inst.points, inst.colours, inst.point_frames);
           ++stats.absorbed;
         }
       }

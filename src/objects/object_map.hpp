@@ -2,6 +2,7 @@
 // The object map (METHODS.md C3), association of frame segments (C4) and the optimisation by
 // association counts (C5).
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <memory>
 #include <unordered_map>
@@ -25,6 +26,7 @@ struct ObjectInstance {
   std::vector<double> score_sum;      ///< c_i, accumulated class scores, size kNumClasses
   std::vector<Eigen::Vector3f> points;  ///< P_i, world frame, one per occupied map voxel
   std::vector<Rgb8> colours;
+  std::vector<uint32_t> point_frames;  ///< per point: the frame it was observed in (pose corrections)
   Eigen::Vector3d point_sum = Eigen::Vector3d::Zero();
   int association_count = 0;          ///< s_i since the last optimisation
   int total_associations = 0;         ///< s_i over the whole run (reporting)
@@ -62,6 +64,10 @@ class ObjectMap {
   /// no count (n, c, s, co-association) changes, so C5 still sees keyframes only.
   /// Returns the number of segments whose points were added.
   size_t extend(const std::vector<ObjectSegment>& segments, size_t frame_index);
+  /// Moves every instance point by the correction of the frame it was observed in (e.g. the
+  /// pose-graph update after a loop closure: T_optimised * T_online^-1); points of frames
+  /// without a correction stay. Points landing in one map voxel merge (C3).
+  void apply_pose_corrections(const std::unordered_map<uint32_t, Eigen::Isometry3f>& corrections);
   /// C5: promote / delete / merge, then reset association counts. `ignore_recency` drops the
   /// "seen recently" exemption (final pass).
   OptimisationStats optimise(size_t step, bool ignore_recency);
@@ -76,7 +82,9 @@ class ObjectMap {
   uint64_t voxel_key(const Eigen::Vector3f& p) const;
   /// One point per map voxel of the segment (the first), with its colour.
   void downsample(const ObjectSegment& segment, std::vector<Eigen::Vector3f>& points, std::vector<Rgb8>& colours) const;
-  void add_points(ObjectInstance& instance, const std::vector<Eigen::Vector3f>& points, const std::vector<Rgb8>& colours);
+  /// `frames`: per point, or one entry for all of them.
+  void add_points(ObjectInstance& instance, const std::vector<Eigen::Vector3f>& points, const std::vector<Rgb8>& colours,
+                  const std::vector<uint32_t>& frames);
   void merge_into(ObjectInstance& target, ObjectInstance& source);
 
   ObjectsConfig config_;

@@ -34,6 +34,10 @@ class ObjectMapper {
   /// (ObjectMap::extend). The keyframes alone decide instances and counts (C2, C4, C5).
   void accumulate(const Frame& frame, const SegmentationResult& segmentation, const Pose& T_world_camera);
   bool accumulates() const { return config_.accumulate_between_keyframes; }
+  /// Per frame index: T_optimised * T_online^-1 (see ObjectMap::apply_pose_corrections).
+  void apply_pose_corrections(const std::unordered_map<uint32_t, Eigen::Isometry3f>& corrections) {
+    map_.apply_pose_corrections(corrections);
+  }
   /// Final C5 pass (config final_optimisation). Call once after the last frame.
   void finish();
   /// objects.json + objects/<id>.ply (schema in SHARED_FORMATS.md), written atomically.

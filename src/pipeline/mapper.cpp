@@ -11,6 +11,7 @@
 #include <mutex>
 #include <opencv2/imgcodecs.hpp>
 #include <thread>
+#include <unordered_map>
 
 #include "core/error.hpp"
 #include "core/paths.hpp"
@@ -245,6 +246,7 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
   std::atomic<size_t> frames_done{0}, skipped_frames{0}, segmented_frames{0}, dropped_segmentations{0};
   std::atomic<size_t> keyframes{0}, objects_processed{0}, objects_in_map{0}, skipped_accumulations{0};
   Trajectory online_trajectory;
+  std::vector<size_t> online_frame_indices;  // frame of each online_trajectory entry
 
   // --- stage bodies -------------------------------------------------------------------
   auto run_segmentation = [&](const Frame& frame) -> std::optional<SegmentationResult> {
@@ -321,6 +323,7 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
       item.segment = r.is_keyframe && config.segmentation.on_keyframes;
     }
     online_trajectory.push_back({frame.timestamp, item.T_world_camera});
+    online_frame_indices.push_back(frame.index);
     item.map_objects = segmenter && (item.segment || frame.index % config.segmentation.every_n_frames == 0);
     item.segment = item.map_objects || label_every_frame;
     item.frame = std::move(frame);
@@ -453,17 +456,26 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
     // quarter voxel (at the far end of the depth range), the TSDF is rebuilt from every frame
     // with its optimised pose and the labels archived for segmented frames.
     max_pose_correction = max_surface_displacement(online_trajectory, trajectory, config.tsdf.max_range);
+    auto pose_at = [&](double timestamp) -> std::optional<Pose> {
+      const auto it = std::lower_bound(trajectory.begin(), trajectory.end(), timestamp - 1e-9,
+                                       [](const StampedPose& p, double t) { return p.timestamp < t; });
+      if (it == trajectory.end() || std::abs(it->timestamp - timestamp) > 1e-6) return std::nullopt;
+      return it->T_world_camera;
+    };
+    if (tracker_stats.loop_edges > 0) {
+      // Object points move with the frame they were observed in (T_optimised * T_online^-1).
+      std::unordered_map<uint32_t, Eigen::Isometry3f> corrections;
+      for (size_t k = 0; k < online_trajectory.size(); ++k)
+        if (const auto optimised = pose_at(online_trajectory[k].timestamp))
+          corrections[static_cast<uint32_t>(online_frame_indices[k])] =
+              (*optimised * online_trajectory[k].T_world_camera.inverse()).cast<float>();
+      objects.apply_pose_corrections(corrections);
+    }
     if (tracker_stats.loop_edges > 0 && max_pose_correction > 0.25 * config.tsdf.voxel_size) {
       const auto t1 = Clock::now();
       SemanticTsdf refreshed(config.tsdf);
       // Reading, repair and label decoding run in parallel; integration stays serial in frame
       // order, so one thread still gives byte-identical maps (issue 8).
-      auto pose_at = [&](double timestamp) -> std::optional<Pose> {
-        const auto it = std::lower_bound(trajectory.begin(), trajectory.end(), timestamp - 1e-9,
-                                         [](const StampedPose& p, double t) { return p.timestamp < t; });
-        if (it == trajectory.end() || std::abs(it->timestamp - timestamp) > 1e-6) return std::nullopt;
-        return it->T_world_camera;
-      };
       size_t next = 0;
       tbb::parallel_pipeline(
           static_cast<size_t>(2 * threads),

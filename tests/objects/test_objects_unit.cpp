@@ -200,6 +200,35 @@ TEST(ObjectsMap, ExtendAddsPointsButNeverCreatesOrCounts) {
   EXPECT_EQ(map.instances().size(), 1u);
 }
 
+// After a loop closure each point moves with the frame it was observed in: a cup mapped from
+// frame 0 (pose unchanged) and grown from frame 7 (pose corrected by 5 cm) ends up with frame 7's
+// points shifted and frame 0's in place.
+TEST(ObjectsMap, PoseCorrectionsMovePointsOfTheirFrames) {
+  ObjectMap map(toy_config());
+  const ClassId cup = id(Label::kCup);
+  map.associate({cube_segment({0, 0, 0}, 0.1f, cup)}, 0, 1);
+  map.extend({cube_segment({0, 0, 0}, 0.11f, cup)}, 7);
+  const ObjectInstance before = map.instances()[0];
+  ASSERT_EQ(before.point_frames.size(), before.points.size());
+  const Eigen::Isometry3f shift(Eigen::Translation3f(0.05f, 0, 0));
+  map.apply_pose_corrections({{7u, shift}});
+  const ObjectInstance& after = map.instances()[0];
+  size_t moved = 0, kept = 0;
+  for (size_t i = 0; i < after.points.size(); ++i) {
+    const Eigen::Vector3f& p = after.points[i];
+    bool found = false;
+    for (size_t j = 0; j < before.points.size() && !found; ++j) {
+      const Eigen::Vector3f expected = before.point_frames[j] == 7u ? shift * before.points[j] : before.points[j];
+      found = (expected - p).norm() < 1e-6f;
+      if (found) (before.point_frames[j] == 7u ? moved : kept) += 1;
+    }
+    EXPECT_TRUE(found) << i;
+  }
+  EXPECT_GT(moved, 0u);
+  EXPECT_GT(kept, 0u);
+  EXPECT_NEAR((after.centroid() - before.centroid()).x(), 0.05f * moved / after.points.size(), 0.01f);
+}
+
 TEST(ObjectsMap, DeletionRule) {
   ObjectsConfig c = toy_config();  // T = 50: delete when s + n < 5 and unseen for > 10 steps
   ObjectMap map(c);
