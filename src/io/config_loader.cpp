@@ -44,6 +44,10 @@ class YamlLoadVisitor : public ParamVisitor {
   void check_unknown() const {
     if (!node_ || !node_.IsMap()) return;
     for (const auto& kv : node_) {
+      // A key may be a sequence or a map in YAML ("? [a, b]: 1"); no parameter is named so.
+      if (!kv.first.IsScalar())
+        throw Error(source_, "config key under '" + (prefix_.empty() ? std::string("(top level)") : prefix_) +
+                                 "' is not a plain name");
       const std::string k = kv.first.as<std::string>();
       if (!known_.count(k))
         throw Error(source_, "unknown config key '" + join_key(prefix_, k) + "' (see `semap config --dump`)");

@@ -45,6 +45,13 @@ TEST(ConfigLoader, BadValuesNameTheKey) {
   EXPECT_NE(error_of("tsdf: {voxel_size: [0.1]}\n").find("tsdf.voxel_size"), std::string::npos);
 }
 
+// Found by fuzz_config_yaml: a YAML map used as a key ("? segmenter: x") escaped as an uncaught
+// yaml-cpp exception (std::terminate) instead of a clean error.
+TEST(ConfigLoader, NonScalarKeyIsACleanError) {
+  EXPECT_NE(error_of("segmentation:\n ? segmenter: groundtruth\n").find("segmentation"), std::string::npos);
+  EXPECT_NE(error_of("? [a, b]\n: 1\n").find("top level"), std::string::npos);
+}
+
 TEST(ConfigLoader, MalformedYamlNamesTheFile) {
   const std::string e = error_of("tsdf:\n  voxel_size: [0.1\n");
   EXPECT_NE(e.find("test.yaml"), std::string::npos);
