@@ -8,6 +8,17 @@
 
 #include "core/paths.hpp"
 
+#if defined(__SANITIZE_THREAD__)
+#include <tbb/global_control.h>
+namespace {
+// ThreadSanitizer cannot see oneTBB's internal synchronisation (Debian's libtbb is not built
+// with TSan) and reports its work stealing (range splitting, stolen-task flags) as races. Under
+// TSan the TBB loops run on the calling thread, so what is checked is our own concurrency:
+// pipeline stage threads, the async segmenter, the tracker's loop-closure worker.
+const tbb::global_control tsan_serial_tbb(tbb::global_control::max_allowed_parallelism, 1);
+}  // namespace
+#endif
+
 namespace semap::test {
 
 std::filesystem::path data_dir() { return semap::data_dir(std::filesystem::path(SEMAP_SHARED_DIR) / "data"); }
