@@ -109,6 +109,21 @@ void ObjectMap::downsample(const ObjectSegment& segment, std::vector<Eigen::Vect
   }
 }
 
+std::vector<std::pair<float, size_t>> ObjectMap::gate(const std::vector<Eigen::Vector3f>& points,
+                                                      std::optional<ClassId> only_class) const {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (const auto& p : points) sum += p.cast<double>();
+  const Eigen::Vector3f centroid = (sum / static_cast<double>(points.size())).cast<float>();
+  std::vector<std::pair<float, size_t>> candidates;
+  for (size_t j = 0; j < instances_.size(); ++j) {
+    if (only_class && instances_[j].class_id() != *only_class) continue;
+    const float d = (instances_[j].centroid() - centroid).norm();
+    if (d < config_.association_distance) candidates.emplace_back(d, j);
+  }
+  std::sort(candidates.begin(), candidates.end());
+  return candidates;
+}
+
 size_t ObjectMap::extend(const std::vector<ObjectSegment>& segments, size_t frame_index) {
   size_t extended = 0;
   for (const auto& segment : segments) {
@@ -116,17 +131,7 @@ size_t ObjectMap::extend(const std::vector<ObjectSegment>& segments, size_t fram
     std::vector<Eigen::Vector3f> points;
     std::vector<Rgb8> colours;
     downsample(segment, points, colours);
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (const auto& p : points) sum += p.cast<double>();
-    const Eigen::Vector3f centroid = (sum / static_cast<double>(points.size())).cast<float>();
-    std::vector<std::pair<float, size_t>> candidates;
-    for (size_t j = 0; j < instances_.size(); ++j) {
-      if (instances_[j].class_id() != segment.class_id) continue;
-      const float d = (instances_[j].centroid() - centroid).norm();
-      if (d < config_.association_distance) candidates.emplace_back(d, j);
-    }
-    std::sort(candidates.begin(), candidates.end());
-    for (const auto& [d, j] : candidates) {
+    for (const auto& [d, j] : gate(points, segment.class_id)) {
       if (overlap(points, instances_[j], config_.overlap_distance) <= config_.overlap_ratio) continue;
       add_points(instances_[j], points, colours, {static_cast<uint32_t>(frame_index)});
       instances_[j].last_frame = std::max(instances_[j].last_frame, frame_index);
@@ -144,17 +149,8 @@ void ObjectMap::associate(const std::vector<ObjectSegment>& segments, size_t fra
     std::vector<Eigen::Vector3f> points;
     std::vector<Rgb8> colours;
     downsample(segment, points, colours);
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (const auto& p : points) sum += p.cast<double>();
-    const Eigen::Vector3f centroid = (sum / static_cast<double>(points.size())).cast<float>();
-
     // C4: candidates inside the centroid gate, nearest first.
-    std::vector<std::pair<float, size_t>> candidates;
-    for (size_t j = 0; j < instances_.size(); ++j) {
-      const float d = (instances_[j].centroid() - centroid).norm();
-      if (d < config_.association_distance) candidates.emplace_back(d, j);
-    }
-    std::sort(candidates.begin(), candidates.end());
+    const std::vector<std::pair<float, size_t>> candidates = gate(points, std::nullopt);
     for (size_t a = 0; a < candidates.size(); ++a) {
       auto& inst = instances_[candidates[a].second];
       ++inst.association_count;

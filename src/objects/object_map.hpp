@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <memory>
 #include <unordered_map>
+#include <optional>
+#include <utility>
 #include <vector>
 
 #include "core/labels.hpp"
@@ -86,6 +88,11 @@ class ObjectMap {
   void add_points(ObjectInstance& instance, const std::vector<Eigen::Vector3f>& points, const std::vector<Rgb8>& colours,
                   const std::vector<uint32_t>& frames);
   void merge_into(ObjectInstance& target, ObjectInstance& source);
+  /// C4 centroid gate: (distance, index) of the instances whose centroid is within
+  /// association_distance of the centroid of `points`, nearest first; only_class keeps
+  /// instances of that class.
+  std::vector<std::pair<float, size_t>> gate(const std::vector<Eigen::Vector3f>& points,
+                                             std::optional<ClassId> only_class) const;
 
   ObjectsConfig config_;
   std::vector<ObjectInstance> instances_;
