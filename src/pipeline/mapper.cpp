@@ -151,22 +151,6 @@ std::unique_ptr<Segmenter> build_segmenter(const RunOptions& options, const Sema
   return make_segmenter(spec, config.segmentation, dataset.camera());
 }
 
-/// How far the optimised poses move a surface point at `range` metres, worst frame (metres):
-/// translation change plus rotation change times the range. Frames are matched by timestamp.
-double max_surface_displacement(const Trajectory& online, const Trajectory& optimised, double range) {
-  double worst = 0.0;
-  size_t k = 0;
-  for (const StampedPose& a : online) {
-    while (k < optimised.size() && optimised[k].timestamp < a.timestamp - 1e-9) ++k;
-    if (k >= optimised.size()) break;
-    if (std::abs(optimised[k].timestamp - a.timestamp) > 1e-6) continue;
-    const Pose& b = optimised[k].T_world_camera;
-    const double angle = Eigen::AngleAxisd(b.linear() * a.T_world_camera.linear().transpose()).angle();
-    worst = std::max(worst, (b.translation() - a.T_world_camera.translation()).norm() + angle * range);
-  }
-  return worst;
-}
-
 /// Ground-truth poses when present, or nullopt.
 std::optional<Pose> usable_pose(const std::optional<Pose>& pose) {
   if (pose && is_valid_pose(*pose, 1e-4)) return pose;
@@ -455,22 +439,27 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
     // The map uses the optimised poses: when loop closure moved the frames by more than a
     // quarter voxel (at the far end of the depth range), the TSDF is rebuilt from every frame
     // with its optimised pose and the labels archived for segmented frames.
-    max_pose_correction = max_surface_displacement(online_trajectory, trajectory, config.tsdf.max_range);
     auto pose_at = [&](double timestamp) -> std::optional<Pose> {
       const auto it = std::lower_bound(trajectory.begin(), trajectory.end(), timestamp - 1e-9,
                                        [](const StampedPose& p, double t) { return p.timestamp < t; });
       if (it == trajectory.end() || std::abs(it->timestamp - timestamp) > 1e-6) return std::nullopt;
       return it->T_world_camera;
     };
-    if (tracker_stats.loop_edges > 0) {
-      // Object points move with the frame they were observed in (T_optimised * T_online^-1).
-      std::unordered_map<uint32_t, Eigen::Isometry3f> corrections;
-      for (size_t k = 0; k < online_trajectory.size(); ++k)
-        if (const auto optimised = pose_at(online_trajectory[k].timestamp))
-          corrections[static_cast<uint32_t>(online_frame_indices[k])] =
-              (*optimised * online_trajectory[k].T_world_camera.inverse()).cast<float>();
-      objects.apply_pose_corrections(corrections);
+    // Per online frame, the correction T_optimised * T_online^-1 of the final pass, and how far
+    // it moves a surface point at the far end of the depth range (camera shift + angle * range).
+    std::unordered_map<uint32_t, Eigen::Isometry3f> corrections;
+    for (size_t k = 0; k < online_trajectory.size(); ++k) {
+      const auto optimised = pose_at(online_trajectory[k].timestamp);
+      if (!optimised) continue;
+      const Pose& online = online_trajectory[k].T_world_camera;
+      const Pose correction = *optimised * online.inverse();
+      corrections[static_cast<uint32_t>(online_frame_indices[k])] = correction.cast<float>();
+      max_pose_correction = std::max(max_pose_correction, (optimised->translation() - online.translation()).norm() +
+                                                              Eigen::AngleAxisd(correction.linear()).angle() *
+                                                                  config.tsdf.max_range);
     }
+    // Object points move with the frame they were observed in.
+    if (tracker_stats.loop_edges > 0) objects.apply_pose_corrections(corrections);
     if (tracker_stats.loop_edges > 0 && max_pose_correction > 0.25 * config.tsdf.voxel_size) {
       const auto t1 = Clock::now();
       SemanticTsdf refreshed(config.tsdf);
