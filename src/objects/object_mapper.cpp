@@ -103,18 +103,16 @@ std::vector<Eigen::Vector3f> largest_cluster(const std::vector<Eigen::Vector3f>&
     cell_of[i] = (points[i].cast<double>() / link_distance).array().floor().cast<int>();
     component.emplace(key(cell_of[i]), -1);
   }
-  std::vector<size_t> cells_per_component;
+  int components = 0;
   std::vector<Eigen::Vector3i> stack;
   for (size_t i = 0; i < points.size(); ++i) {
     if (component[key(cell_of[i])] >= 0) continue;
-    const int id = static_cast<int>(cells_per_component.size());
-    cells_per_component.push_back(0);
+    const int id = components++;
     component[key(cell_of[i])] = id;
     stack.assign(1, cell_of[i]);
     while (!stack.empty()) {
       const Eigen::Vector3i c = stack.back();
       stack.pop_back();
-      ++cells_per_component[id];
       for (int dx = -1; dx <= 1; ++dx)
         for (int dy = -1; dy <= 1; ++dy)
           for (int dz = -1; dz <= 1; ++dz) {
@@ -125,7 +123,7 @@ std::vector<Eigen::Vector3f> largest_cluster(const std::vector<Eigen::Vector3f>&
           }
     }
   }
-  std::vector<size_t> points_per_component(cells_per_component.size(), 0);
+  std::vector<size_t> points_per_component(static_cast<size_t>(components), 0);
   for (size_t i = 0; i < points.size(); ++i) ++points_per_component[component[key(cell_of[i])]];
   const int best = static_cast<int>(std::max_element(points_per_component.begin(), points_per_component.end()) -
                                     points_per_component.begin());
