@@ -88,7 +88,7 @@ struct VoxelUpdater {
     const float W = wq.decode(v.weight_q);
     const float W_new = W + w;
     v.set_sdf(W > 0 ? (W * v.sdf() + w * d) / W_new : d);
-    v.weight_q = wq.encode(std::min(W_new, w_max));
+    v.weight_q = wq.encode_from(std::min(W_new, w_max), v.weight_q);
     if (colour_layer && colour) {
       Rgb8& c = block.colour[li];
       const float a = W / W_new, b = w / W_new;

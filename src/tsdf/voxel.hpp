@@ -88,6 +88,21 @@ class WeightQuantizer {
     const auto it = std::upper_bound(upper_.begin(), upper_.end(), w);  // first bound > w
     return static_cast<uint8_t>(std::max<std::ptrdiff_t>(it - upper_.begin(), 1));  // observed stays > 0
   }
+  /// encode(weight), found by scanning upward from `from`: a voxel's new weight W + w (B6) is
+  /// never below its old code, and once W is large it moves by 0-2 codes, where the scan ends
+  /// after a comparison or two instead of the 8 unpredictable branches of the binary search.
+  /// Any `from` gives encode's result (a weight below decode(from) takes the full search).
+  uint8_t encode_from(float weight, uint8_t from) const {
+    if (!(weight > 0)) return 0;
+    if (weight >= max_) return 255;
+    const double w = weight;
+    if (from > 1 && w < upper_[from - 1]) return encode(weight);
+    constexpr int kScanSteps = 4;  // then a binary search over the rest (first observations jump far)
+    int q = from;
+    for (const int last = std::min(q + kScanSteps, 255); q < last; ++q)
+      if (upper_[q] > w) return static_cast<uint8_t>(std::max(q, 1));
+    return static_cast<uint8_t>(std::upper_bound(upper_.begin() + q, upper_.end(), w) - upper_.begin());
+  }
   double unit() const { return unit_; }
   double max() const { return max_; }
 

@@ -82,6 +82,30 @@ TEST(Quantizers, TableSearchEqualsClosedForm) {
   EXPECT_EQ(codec.encode(1e-6f), 255);
 }
 
+// The integrator's upward scan from the old code must give encode's code for any start code,
+// for weights above, at and below decode(start), including the ends of the scale.
+TEST(WeightQuantizer, EncodeFromEqualsEncode) {
+  const WeightQuantizer wq(0.01, 1000.0);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> log_w(std::log(1e-5), std::log(2000.0));
+  std::uniform_int_distribution<int> code(0, 255);
+  int mismatches = 0;
+  for (int i = 0; i < 500000; ++i) {
+    const float w = static_cast<float>(std::exp(log_w(rng)));
+    const uint8_t from = static_cast<uint8_t>(i % 2 ? code(rng) : wq.encode(w * 0.8f));  // random / a realistic old code
+    mismatches += wq.encode_from(w, from) != wq.encode(w);
+  }
+  for (int q = 0; q < 256; ++q)
+    for (int from = 0; from < 256; ++from) {
+      const float w = wq.decode(static_cast<uint8_t>(q));
+      mismatches += wq.encode_from(w, static_cast<uint8_t>(from)) != wq.encode(w);
+      mismatches += wq.encode_from(std::nextafter(w, 0.0f), static_cast<uint8_t>(from)) != wq.encode(std::nextafter(w, 0.0f));
+    }
+  for (float w : {0.0f, -1.0f, std::nanf(""), 1e-9f, 1000.0f, 1e9f})
+    for (int from : {0, 1, 2, 128, 254, 255}) mismatches += wq.encode_from(w, static_cast<uint8_t>(from)) != wq.encode(w);
+  EXPECT_EQ(mismatches, 0);
+}
+
 TEST(SemanticGrouping, PicksWeightedMajorityLabelAndItsMean) {
   // 3 chair points of weight 1 against 2 table points of weight 2: table wins (4 > 3).
   std::vector<LabelledPoint> pts = {
