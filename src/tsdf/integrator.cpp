@@ -121,6 +121,12 @@ void traverse_cells(const Eigen::Vector3f& a, const Eigen::Vector3f& b, float ce
   const Eigen::Vector3f pa = a / cell, pb = b / cell;
   Eigen::Vector3i c = pa.array().floor().cast<int>();
   const Eigen::Vector3i end = pb.array().floor().cast<int>();
+  const int n = 1 + std::abs(end.x() - c.x()) + std::abs(end.y() - c.y()) + std::abs(end.z() - c.z());
+  if (n <= 2) {  // the common short segment: its end cells are all it crosses, no stepping needed
+    visit(c);
+    if (n == 2) visit(end);
+    return;
+  }
   const Eigen::Vector3f dir = pb - pa;
   Eigen::Vector3i step;
   Eigen::Vector3f t_max, t_delta;
@@ -134,7 +140,6 @@ void traverse_cells(const Eigen::Vector3f& a, const Eigen::Vector3f& b, float ce
       t_delta[i] = static_cast<float>(step[i]) / dir[i];
     }
   }
-  const int n = 1 + std::abs(end.x() - c.x()) + std::abs(end.y() - c.y()) + std::abs(end.z() - c.z());
   for (int i = 0; i < n; ++i) {
     visit(c);
     int axis = t_max.x() < t_max.y() ? (t_max.x() < t_max.z() ? 0 : 2) : (t_max.y() < t_max.z() ? 1 : 2);
@@ -466,6 +471,7 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
     const int kRowsPerChunk = 8 * stride;
     const int n_chunks = (H + kRowsPerChunk - 1) / kRowsPerChunk;
     chunk_blocks_.resize(n_chunks);
+    usable_depth_.resize(static_cast<size_t>(W) * H);
     std::vector<size_t> valid(n_chunks, 0);
     tbb::parallel_for(0, n_chunks, [&](int c) {
       std::vector<uint64_t>& out = chunk_blocks_[c];
@@ -473,11 +479,17 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
       // Small direct-mapped cache to skip repeated keys of neighbouring pixels.
       std::array<uint64_t, 64> recent;
       recent.fill(~0ULL);
-      for (int v = c * kRowsPerChunk; v < std::min(H, (c + 1) * kRowsPerChunk); v += stride) {
+      for (int v = c * kRowsPerChunk; v < std::min(H, (c + 1) * kRowsPerChunk); ++v) {
+        // Every row, in one sequential pass: the depth (0 = unusable) that step 2 looks up at
+        // random comes from this warm copy instead of a cold frame (its misses were the voxel
+        // loop's hottest instruction).
         const float* depth = in.depth.ptr<float>(v);
+        float* usable = &usable_depth_[static_cast<size_t>(v) * W];
+        for (int u = 0; u < W; ++u) usable[u] = usable_depth(depth[u], f.min_range, f.max_range) ? depth[u] : 0.0f;
+        if (v % stride != 0) continue;
         for (int u = 0; u < W; u += stride) {
-          const float z = depth[u];
-          if (!usable_depth(z, f.min_range, f.max_range)) continue;
+          const float z = usable[u];
+          if (z == 0.0f) continue;
           ++valid[c];
           const Eigen::Vector3f pc((u - f.cx) * z / f.fx, (v - f.cy) * z / f.fy, z);
           const float dist = pc.norm();
@@ -521,7 +533,16 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
     // 2. Project every voxel of every touched block (parallel per block).
     const VoxelUpdater updater = make_updater(map, f);
     const bool colour = f.colour && map.has_colour_layer();
+    const float width = static_cast<float>(W), height = static_cast<float>(H);
     std::vector<size_t> updates(touched.blocks.size(), 0);
+    // Label-only observations depend on the label alone: one per class, not one per voxel (A6).
+    if (bayes && !f.probabilities && !f.confidence)
+      for (int l = 1; l < kNumClasses; ++l)
+        label_observations_[l] = ClassDistribution::from_label(static_cast<ClassId>(l), f.default_confidence, f.confusion_classes);
+    // Frame constants as locals: the voxel stores (bytes, which may alias anything) would
+    // otherwise make every iteration reload them.
+    const float fx = f.fx, fy = f.fy, cx = f.cx, cy = f.cy, min_range = f.min_range, delta = f.delta;
+    const float* usable_depth = usable_depth_.data();
     tbb::parallel_for(size_t{0}, touched.blocks.size(), [&](size_t k) {
       Block& block = *touched.blocks[k];
       const Eigen::Vector3f origin = block.index.cast<float>() * block_size + Eigen::Vector3f::Constant(0.5f * f.s);
@@ -532,26 +553,30 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
         for (int y = 0; y < kBlockSide; ++y) {
           Eigen::Vector3f pc = base + step_y * static_cast<float>(y) + step_z * static_cast<float>(z);
           for (int x = 0; x < kBlockSide; ++x, pc += step_x) {
-            if (pc.z() <= f.min_range) continue;
+            if (pc.z() <= min_range) continue;
             const float inv_z = 1.0f / pc.z();
-            const int u = static_cast<int>(std::floor(f.fx * pc.x() * inv_z + f.cx + 0.5f));
-            const int v = static_cast<int>(std::floor(f.fy * pc.y() * inv_z + f.cy + 0.5f));
-            if (u < 0 || v < 0 || u >= W || v >= H) continue;
-            const float depth = in.depth.ptr<float>(v)[u];
-            if (!usable_depth(depth, f.min_range, f.max_range)) continue;
-            const float sdf = (depth - pc.z()) * pc.norm() * inv_z;  // along the ray
-            if (sdf <= -f.delta) continue;
+            // Nearest pixel: floor(x + 0.5). For x in [0, W) truncation is that floor; the test on
+            // the float (false for NaN too) skips the same pixels as floor(x) outside [0, W).
+            const float x_pix = fx * pc.x() * inv_z + cx + 0.5f, y_pix = fy * pc.y() * inv_z + cy + 0.5f;
+            if (!(x_pix >= 0.0f && x_pix < width && y_pix >= 0.0f && y_pix < height)) continue;
+            const int u = static_cast<int>(x_pix), v = static_cast<int>(y_pix);
             const size_t pix = static_cast<size_t>(v) * W + u;
+            const float depth = usable_depth[pix];
+            if (depth == 0.0f) continue;
+            const float sdf = (depth - pc.z()) * pc.norm() * inv_z;  // along the ray
+            if (sdf <= -delta) continue;
             const ClassId label = f.labels ? in.labels.ptr<uint8_t>(v)[u] : 0;
-            ClassDistribution observation;
+            ClassDistribution confidence_observation;
             const ClassDistribution* obs = nullptr;
             if (bayes && label != 0) {
               if (f.probabilities) {
                 obs = &pixel_observations_[pix];
+              } else if (f.confidence) {
+                const float c = std::clamp(in.confidence.ptr<float>(v)[u], 0.01f, 0.999f);
+                confidence_observation = ClassDistribution::from_label(label, c, f.confusion_classes);
+                obs = &confidence_observation;
               } else {
-                const float c = f.confidence ? std::clamp(in.confidence.ptr<float>(v)[u], 0.01f, 0.999f) : f.default_confidence;
-                observation = ClassDistribution::from_label(label, c, f.confusion_classes);
-                obs = &observation;
+                obs = &label_observations_[label];
               }
             }
             Rgb8 rgb;
@@ -572,7 +597,9 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
   }
 
   std::vector<std::vector<uint64_t>> chunk_blocks_;
+  std::vector<float> usable_depth_;  ///< the frame's depth, 0 where not usable (step 1 -> step 2)
   std::vector<ClassDistribution> pixel_observations_;
+  std::array<ClassDistribution, kNumClasses> label_observations_;  ///< by label, labels without confidence
 };
 
 }  // namespace
