@@ -8,7 +8,7 @@ PACKAGES=(
   libeigen3-dev libopencv-dev libpcl-dev libceres-dev libtbb-dev
   nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev libyaml-cpp-dev
   libgtest-dev libgmock-dev libbenchmark-dev libnanoflann-dev
-  libopen3d-dev libcpp-httplib-dev
+  libopen3d-dev libcpp-httplib-dev libdeflate-dev
 )
 # Extra packages can be requested by callers, e.g. the CI adds clang for fuzzing.
 PACKAGES+=("$@")

@@ -6,6 +6,7 @@
 
 #include "core/error.hpp"
 #include "core/paths.hpp"
+#include "io/png_decoder.hpp"
 #include "io/text_util.hpp"
 
 namespace semap {
@@ -54,6 +55,7 @@ cv::Mat decode(const std::filesystem::path& path) {
   if (bytes.empty()) throw Error(path, "empty image file");
   if (bytes.size() > (size_t{1} << 30)) throw Error(path, "image file larger than 1 GiB");
   check_container(path, bytes);
+  if (auto fast = decode_png_fast(bytes)) return std::move(*fast);  // the common RGB-D layouts
   cv::Mat image;
   try {
     image = cv::imdecode(cv::Mat(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data())),
