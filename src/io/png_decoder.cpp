@@ -8,6 +8,8 @@
 #include <memory>
 #include <vector>
 
+#include <opencv2/imgproc.hpp>
+
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -174,37 +176,36 @@ std::optional<cv::Mat> decode_png_fast(std::string_view bytes) {
   const size_t bpp = static_cast<size_t>(channels) * (h.bit_depth / 8);
   const size_t row_bytes = bpp * h.width, stride = row_bytes + 1;
   const size_t expected = stride * h.height;
-  std::vector<uint8_t> raw(expected + kSlack);
+  const std::unique_ptr<uint8_t[]> raw(new uint8_t[expected + kSlack]);  // not zero-filled: inflate writes it all
+  std::memset(raw.get() + expected, 0, kSlack);
   size_t actual = 0;
-  if (libdeflate_zlib_decompress(thread_decompressor(), compressed.data(), compressed.size(), raw.data(), expected,
+  if (libdeflate_zlib_decompress(thread_decompressor(), compressed.data(), compressed.size(), raw.get(), expected,
                                  &actual) != LIBDEFLATE_SUCCESS ||
       actual != expected)
     return std::nullopt;
 
-  cv::Mat image(static_cast<int>(h.height), static_cast<int>(h.width),
-                CV_MAKETYPE(h.bit_depth == 16 ? CV_16U : CV_8U, channels));
   const std::vector<uint8_t> zero_row(row_bytes + kSlack, 0);
   for (uint32_t y = 0; y < h.height; ++y) {
-    uint8_t* row = raw.data() + y * stride;
+    uint8_t* row = raw.get() + y * stride;
     const int filter = row[0];
     if (filter > 4) return std::nullopt;
-    uint8_t* cur = row + 1;
-    const uint8_t* up = y == 0 ? zero_row.data() : row - stride + 1;
-    unfilter_row(filter, cur, up, row_bytes, bpp);
-    uint8_t* out = image.ptr<uint8_t>(static_cast<int>(y));
-    if (h.bit_depth == 16) {
-      auto* out16 = reinterpret_cast<uint16_t*>(out);
-      for (uint32_t x = 0; x < h.width; ++x) out16[x] = static_cast<uint16_t>((cur[2 * x] << 8) | cur[2 * x + 1]);
-    } else if (channels == 1) {
-      std::memcpy(out, cur, row_bytes);
-    } else {  // RGB(A) -> BGR(A), OpenCV's channel order
-      for (size_t i = 0; i < row_bytes; i += bpp) {
-        out[i] = cur[i + 2];
-        out[i + 1] = cur[i + 1];
-        out[i + 2] = cur[i];
-        if (bpp == 4) out[i + 3] = cur[i + 3];
-      }
+    unfilter_row(filter, row + 1, y == 0 ? zero_row.data() : row + 1 - stride, row_bytes, bpp);
+  }
+  // The un-filtered rows, each after its filter byte, as a strided view for OpenCV's
+  // vectorised conversions into its own channel order.
+  const int rows = static_cast<int>(h.height), cols = static_cast<int>(h.width);
+  cv::Mat image;
+  if (h.bit_depth == 16) {
+    image.create(rows, cols, CV_16UC1);
+    for (int y = 0; y < rows; ++y) {
+      const uint8_t* in = raw.get() + y * stride + 1;
+      uint16_t* out = image.ptr<uint16_t>(y);
+      for (int x = 0; x < cols; ++x) out[x] = static_cast<uint16_t>((in[2 * x] << 8) | in[2 * x + 1]);
     }
+  } else {
+    const cv::Mat view(rows, cols, CV_MAKETYPE(CV_8U, channels), raw.get() + 1, stride);
+    if (channels == 1) view.copyTo(image);
+    else cv::cvtColor(view, image, channels == 3 ? cv::COLOR_RGB2BGR : cv::COLOR_RGBA2BGRA);
   }
   return image;
 }
