@@ -79,7 +79,7 @@ struct VoxelUpdater {
 
   /// d: signed distance (positive in front), w: ray weight before the drop-off.
   /// Returns false when nothing was updated (beyond -delta).
-  bool update(Block& block, int li, float d, float w, ClassId label, const ClassDistribution* observation,
+  [[gnu::always_inline]] bool update(Block& block, int li, float d, float w, ClassId label, const ClassDistribution* observation,
               const Rgb8* colour) const {
     if (d <= -delta) return false;
     if (d < -eps) w *= (delta + d) / (delta - eps);  // B6 linear drop-off behind the surface
@@ -115,12 +115,22 @@ VoxelUpdater make_updater(const TsdfMap& map, const FrameSetup& f) {
 
 int arena_threads(const TsdfConfig& cfg) { return cfg.threads > 0 ? cfg.threads : tbb::info::default_concurrency(); }
 
-/// Amanatides-Woo traversal of the cells (edge `cell`) crossed by segment a -> b.
+/// floor(p) per axis as cell indices: the truncating cast, one lower for negative non-integers.
+/// Equal to std::floor within the int range, without its libm/SSE4.1-less slow path.
+inline Eigen::Vector3i floor_cells(const Eigen::Vector3f& p) {
+  Eigen::Vector3i c;
+  for (int i = 0; i < 3; ++i) {
+    const int t = static_cast<int>(p[i]);
+    c[i] = t - (p[i] < static_cast<float>(t) ? 1 : 0);
+  }
+  return c;
+}
+
+/// Amanatides-Woo traversal of the unit cells crossed by segment pa -> pb (in cell units).
 template <class Visit>
-void traverse_cells(const Eigen::Vector3f& a, const Eigen::Vector3f& b, float cell, Visit&& visit) {
-  const Eigen::Vector3f pa = a / cell, pb = b / cell;
-  Eigen::Vector3i c = pa.array().floor().cast<int>();
-  const Eigen::Vector3i end = pb.array().floor().cast<int>();
+void traverse_cells(const Eigen::Vector3f& pa, const Eigen::Vector3f& pb, Visit&& visit) {
+  Eigen::Vector3i c = floor_cells(pa);
+  const Eigen::Vector3i end = floor_cells(pb);
   const int n = 1 + std::abs(end.x() - c.x()) + std::abs(end.y() - c.y()) + std::abs(end.z() - c.z());
   if (n <= 2) {  // the common short segment: its end cells are all it crosses, no stepping needed
     visit(c);
@@ -260,7 +270,7 @@ class GroupedIntegrator final : public ArenaIntegrator {
           if (!usable_depth(z, f.min_range, f.max_range)) continue;
           const Eigen::Vector3f pc((u - f.cx) * z / f.fx, (v - f.cy) * z / f.fy, z);
           pp.p = f.R_wc * pc + f.t_wc;
-          const Eigen::Vector3i vox = (pp.p * inv_s).array().floor().cast<int>();
+          const Eigen::Vector3i vox = floor_cells(pp.p * inv_s);
           if (!key_in_range(vox)) continue;
           pp.key = pack_key(vox);
           pp.w = 1.0f / (z * z);  // B6 point weight
@@ -354,7 +364,7 @@ class GroupedIntegrator final : public ArenaIntegrator {
         const Eigen::Vector3f dir = ray / dist;
         const Eigen::Vector3f a = f.t_wc + dir * std::max(0.0f, dist - delta);
         const Eigen::Vector3f b = f.t_wc + dir * (dist + delta);
-        traverse_cells(a, b, f.s, [&](const Eigen::Vector3i& vox) {
+        traverse_cells(a / f.s, b / f.s, [&](const Eigen::Vector3i& vox) {
           const Eigen::Vector3f centre = (vox.cast<float>().array() + 0.5f) * f.s;
           const float d = dist - (centre - f.t_wc).norm();  // B6 d(v, p, o)
           if (d <= -delta) return;
@@ -472,6 +482,9 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
     const int n_chunks = (H + kRowsPerChunk - 1) / kRowsPerChunk;
     chunk_blocks_.resize(n_chunks);
     usable_depth_.resize(static_cast<size_t>(W) * H);
+    rays_.update(f);
+    const Eigen::Matrix3f R_blocks = f.R_wc / block_size;  // camera -> world, in block units
+    const Eigen::Vector3f t_blocks = f.t_wc / block_size;
     std::vector<size_t> valid(n_chunks, 0);
     tbb::parallel_for(0, n_chunks, [&](int c) {
       std::vector<uint64_t>& out = chunk_blocks_[c];
@@ -487,16 +500,19 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
         float* usable = &usable_depth_[static_cast<size_t>(v) * W];
         for (int u = 0; u < W; ++u) usable[u] = usable_depth(depth[u], f.min_range, f.max_range) ? depth[u] : 0.0f;
         if (v % stride != 0) continue;
+        const float ray_y = rays_.y[v];
+        const Eigen::Vector3f row_ray = R_blocks * Eigen::Vector3f(0.0f, ray_y, 1.0f);
         for (int u = 0; u < W; u += stride) {
           const float z = usable[u];
           if (z == 0.0f) continue;
           ++valid[c];
-          const Eigen::Vector3f pc((u - f.cx) * z / f.fx, (v - f.cy) * z / f.fy, z);
-          const float dist = pc.norm();
-          const Eigen::Vector3f dir = f.R_wc * (pc / dist);
-          const Eigen::Vector3f a = f.t_wc + dir * std::max(0.0f, dist - f.delta);
-          const Eigen::Vector3f b = f.t_wc + dir * (dist + f.delta);
-          traverse_cells(a, b, block_size, [&](const Eigen::Vector3i& blk) {
+          // The pixel's point is z * ray (camera frame), at distance z / inv_norm; the band
+          // [dist - delta, dist + delta] along the ray, in block units (no division per pixel).
+          const Eigen::Vector3f ray = row_ray + R_blocks.col(0) * rays_.x[u];
+          const float band = f.delta * rays_.inv_norm[static_cast<size_t>(v) * W + u];
+          const Eigen::Vector3f a = t_blocks + ray * std::max(0.0f, z - band);
+          const Eigen::Vector3f b = t_blocks + ray * (z + band);
+          traverse_cells(a, b, [&](const Eigen::Vector3i& blk) {
             if (!key_in_range(blk)) return;
             const uint64_t key = pack_key(blk);
             uint64_t& r = recent[mix_key(key) & 63];
@@ -596,7 +612,28 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
     stats_.allocated_blocks = touched.allocated;
   }
 
+  /// Camera rays of the depth pixels, kept while the intrinsics and image size stay: pixel (u, v)
+  /// at depth z is the camera point z * (x[u], y[v], 1), at distance z / inv_norm[v * W + u].
+  struct PixelRays {
+    float fx = 0, fy = 0, cx = 0, cy = 0;
+    int width = 0, height = 0;
+    std::vector<float> x, y, inv_norm;
+    void update(const FrameSetup& f) {
+      if (f.fx == fx && f.fy == fy && f.cx == cx && f.cy == cy && f.width == width && f.height == height) return;
+      fx = f.fx, fy = f.fy, cx = f.cx, cy = f.cy, width = f.width, height = f.height;
+      x.resize(width);
+      y.resize(height);
+      inv_norm.resize(static_cast<size_t>(width) * height);
+      for (int u = 0; u < width; ++u) x[u] = (u - cx) / fx;
+      for (int v = 0; v < height; ++v) y[v] = (v - cy) / fy;
+      for (int v = 0; v < height; ++v)
+        for (int u = 0; u < width; ++u)
+          inv_norm[static_cast<size_t>(v) * width + u] = 1.0f / std::sqrt(1.0f + x[u] * x[u] + y[v] * y[v]);
+    }
+  };
+
   std::vector<std::vector<uint64_t>> chunk_blocks_;
+  PixelRays rays_;
   std::vector<float> usable_depth_;  ///< the frame's depth, 0 where not usable (step 1 -> step 2)
   std::vector<ClassDistribution> pixel_observations_;
   std::array<ClassDistribution, kNumClasses> label_observations_;  ///< by label, labels without confidence
