@@ -564,46 +564,57 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
       const Eigen::Vector3f origin = block.index.cast<float>() * block_size + Eigen::Vector3f::Constant(0.5f * f.s);
       const Eigen::Vector3f base = f.R_cw * origin + f.t_cw;
       const Eigen::Vector3f step_x = f.R_cw.col(0) * f.s, step_y = f.R_cw.col(1) * f.s, step_z = f.R_cw.col(2) * f.s;
-      size_t n = 0;
+      // Pass 1, branch-free: every voxel's pixel (u = -1 when behind the camera or off the image)
+      // and ray geometry; pass 2 then branches only on the voxels that project into the image.
+      std::array<int32_t, kBlockVoxels> voxel_u, voxel_v;
+      std::array<float, kBlockVoxels> voxel_z, voxel_norm, voxel_inv_z;
       for (int z = 0; z < kBlockSide; ++z)
         for (int y = 0; y < kBlockSide; ++y) {
           Eigen::Vector3f pc = base + step_y * static_cast<float>(y) + step_z * static_cast<float>(z);
           for (int x = 0; x < kBlockSide; ++x, pc += step_x) {
-            if (pc.z() <= min_range) continue;
+            const int li = x + kBlockSide * (y + kBlockSide * z);
             const float inv_z = 1.0f / pc.z();
             // Nearest pixel: floor(x + 0.5). For x in [0, W) truncation is that floor; the test on
             // the float (false for NaN too) skips the same pixels as floor(x) outside [0, W).
             const float x_pix = fx * pc.x() * inv_z + cx + 0.5f, y_pix = fy * pc.y() * inv_z + cy + 0.5f;
-            if (!(x_pix >= 0.0f && x_pix < width && y_pix >= 0.0f && y_pix < height)) continue;
-            const int u = static_cast<int>(x_pix), v = static_cast<int>(y_pix);
-            const size_t pix = static_cast<size_t>(v) * W + u;
-            const float depth = usable_depth[pix];
-            if (depth == 0.0f) continue;
-            const float sdf = (depth - pc.z()) * pc.norm() * inv_z;  // along the ray
-            if (sdf <= -delta) continue;
-            const ClassId label = f.labels ? in.labels.ptr<uint8_t>(v)[u] : 0;
-            ClassDistribution confidence_observation;
-            const ClassDistribution* obs = nullptr;
-            if (bayes && label != 0) {
-              if (f.probabilities) {
-                obs = &pixel_observations_[pix];
-              } else if (f.confidence) {
-                const float c = std::clamp(in.confidence.ptr<float>(v)[u], 0.01f, 0.999f);
-                confidence_observation = ClassDistribution::from_label(label, c, f.confusion_classes);
-                obs = &confidence_observation;
-              } else {
-                obs = &label_observations_[label];
-              }
-            }
-            Rgb8 rgb;
-            if (colour) {
-              const uint8_t* bgr = in.colour.ptr<uint8_t>(v) + 3 * u;
-              rgb = Rgb8{bgr[2], bgr[1], bgr[0]};
-            }
-            n += updater.update(block, x + kBlockSide * (y + kBlockSide * z), sdf, 1.0f / (depth * depth), label, obs,
-                                colour ? &rgb : nullptr);
+            const bool in_image = pc.z() > min_range && x_pix >= 0.0f && x_pix < width && y_pix >= 0.0f && y_pix < height;
+            voxel_u[li] = in_image ? static_cast<int>(x_pix) : -1;
+            voxel_v[li] = in_image ? static_cast<int>(y_pix) : -1;
+            voxel_z[li] = pc.z();
+            voxel_norm[li] = pc.norm();
+            voxel_inv_z[li] = inv_z;
           }
         }
+      size_t n = 0;
+      for (int li = 0; li < kBlockVoxels; ++li) {
+        const int u = voxel_u[li], v = voxel_v[li];
+        if (u < 0) continue;
+        const size_t pix = static_cast<size_t>(v) * W + u;
+        const float depth = usable_depth[pix];
+        if (depth == 0.0f) continue;
+        const float sdf = (depth - voxel_z[li]) * voxel_norm[li] * voxel_inv_z[li];  // along the ray
+        if (sdf <= -delta) continue;
+        const ClassId label = f.labels ? in.labels.ptr<uint8_t>(v)[u] : 0;
+        ClassDistribution confidence_observation;
+        const ClassDistribution* obs = nullptr;
+        if (bayes && label != 0) {
+          if (f.probabilities) {
+            obs = &pixel_observations_[pix];
+          } else if (f.confidence) {
+            const float c = std::clamp(in.confidence.ptr<float>(v)[u], 0.01f, 0.999f);
+            confidence_observation = ClassDistribution::from_label(label, c, f.confusion_classes);
+            obs = &confidence_observation;
+          } else {
+            obs = &label_observations_[label];
+          }
+        }
+        Rgb8 rgb;
+        if (colour) {
+          const uint8_t* bgr = in.colour.ptr<uint8_t>(v) + 3 * u;
+          rgb = Rgb8{bgr[2], bgr[1], bgr[0]};
+        }
+        n += updater.update(block, li, sdf, 1.0f / (depth * depth), label, obs, colour ? &rgb : nullptr);
+      }
       if (n) block.mesh_dirty = true;
       updates[k] = n;
     });
