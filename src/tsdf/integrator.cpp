@@ -79,8 +79,9 @@ struct VoxelUpdater {
 
   /// d: signed distance (positive in front), w: ray weight before the drop-off.
   /// Returns false when nothing was updated (beyond -delta).
-  [[gnu::always_inline]] bool update(Block& block, int li, float d, float w, ClassId label, const ClassDistribution* observation,
-              const Rgb8* colour) const {
+  /// Inlined into the voxel loops (measured: a call per update cost ~5 % of a projective frame).
+  [[gnu::always_inline]] bool update(Block& block, int li, float d, float w, ClassId label,
+                                     const ClassDistribution* observation, const Rgb8* colour) const {
     if (d <= -delta) return false;
     if (d < -eps) w *= (delta + d) / (delta - eps);  // B6 linear drop-off behind the surface
     if (d > delta) d = delta;
@@ -554,7 +555,8 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
     // Label-only observations depend on the label alone: one per class, not one per voxel (A6).
     if (bayes && !f.probabilities && !f.confidence)
       for (int l = 1; l < kNumClasses; ++l)
-        label_observations_[l] = ClassDistribution::from_label(static_cast<ClassId>(l), f.default_confidence, f.confusion_classes);
+        label_observations_[l] =
+            ClassDistribution::from_label(static_cast<ClassId>(l), f.default_confidence, f.confusion_classes);
     // Frame constants as locals: the voxel stores (bytes, which may alias anything) would
     // otherwise make every iteration reload them.
     const float fx = f.fx, fy = f.fy, cx = f.cx, cy = f.cy, min_range = f.min_range, delta = f.delta;
@@ -577,7 +579,8 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
             // Nearest pixel: floor(x + 0.5). For x in [0, W) truncation is that floor; the test on
             // the float (false for NaN too) skips the same pixels as floor(x) outside [0, W).
             const float x_pix = fx * pc.x() * inv_z + cx + 0.5f, y_pix = fy * pc.y() * inv_z + cy + 0.5f;
-            const bool in_image = pc.z() > min_range && x_pix >= 0.0f && x_pix < width && y_pix >= 0.0f && y_pix < height;
+            const bool in_image =
+                pc.z() > min_range && x_pix >= 0.0f && x_pix < width && y_pix >= 0.0f && y_pix < height;
             voxel_u[li] = in_image ? static_cast<int>(x_pix) : -1;
             voxel_v[li] = in_image ? static_cast<int>(y_pix) : -1;
             voxel_z[li] = pc.z();
