@@ -49,9 +49,14 @@ std::unique_ptr<DatasetReader> open_layout(const fs::path& root, const DatasetOp
 
 }  // namespace
 
-Frame DatasetReader::load(size_t i) const {
+cv::Mat DatasetReader::load_depth(size_t i) const {
   if (i >= records_.size())
     throw Error(root_, "frame " + std::to_string(i) + " out of range (" + std::to_string(records_.size()) + " frames)");
+  return read_depth_image(records_[i].depth, camera_.depth_scale, cv::Size(camera_.depth.width, camera_.depth.height));
+}
+
+Frame DatasetReader::load(size_t i) const {
+  cv::Mat depth = load_depth(i);  // checks i
   const FrameRecord& rec = records_[i];
   Frame frame;
   frame.index = i;
@@ -59,8 +64,7 @@ Frame DatasetReader::load(size_t i) const {
   frame.rgb_path = rec.rgb.string();
   frame.depth_path = rec.depth.string();
   frame.gt_T_world_camera = rec.gt_T_world_camera;
-  const cv::Size depth_size(camera_.depth.width, camera_.depth.height);
-  frame.depth = read_depth_image(rec.depth, camera_.depth_scale, depth_size);
+  frame.depth = std::move(depth);
   frame.rgb = read_colour_image(rec.rgb);
   if (!camera_.colour && frame.rgb.size() != frame.depth.size())
     throw Error(rec.rgb, "RGB image is " + size_text(frame.rgb.size()) + " but depth image " + rec.depth.string() +

@@ -32,6 +32,8 @@ class DatasetReader {
   const std::vector<FrameRecord>& records() const { return records_; }
   /// Decodes frame i (throws semap::Error naming the file when it is unreadable/inconsistent).
   virtual Frame load(size_t i) const;
+  /// Decodes only the depth image of frame i (CV_32FC1 metres), validated as load() does.
+  cv::Mat load_depth(size_t i) const;
   /// Ground-truth trajectory of the sequence (per frame, where known).
   Trajectory ground_truth() const;
   bool has_ground_truth() const;

@@ -24,6 +24,7 @@
 #include "io/trajectory_io.hpp"
 #include "objects/object_mapper.hpp"
 #include "pipeline/bounded_queue.hpp"
+#include "pipeline/refresh_archive.hpp"
 #include "pipeline/report.hpp"
 #include "pipeline/simulated_segmenter.hpp"
 #include "pipeline/stage_timer.hpp"
@@ -75,34 +76,6 @@ struct ObjectWork {
   SegmentationResult segmentation;
   Pose T_world_camera;
   bool keyframe = true;  ///< false: a segmented frame between object keyframes (ObjectMapper::accumulate)
-};
-
-/// Labels of segmented frames, PNG-compressed in memory, so the final map refresh can
-/// re-integrate them with optimised poses without keeping full images (bounded memory).
-class LabelArchive {
- public:
-  void store(size_t frame_index, const cv::Mat& labels) {
-    if (labels.empty()) return;
-    std::vector<uchar> png;
-    cv::imencode(".png", labels, png);
-    std::lock_guard lock(mutex_);
-    archive_[frame_index] = std::move(png);
-  }
-  cv::Mat find(size_t frame_index) const {
-    std::lock_guard lock(mutex_);
-    const auto it = archive_.find(frame_index);
-    return it == archive_.end() ? cv::Mat() : cv::imdecode(it->second, cv::IMREAD_UNCHANGED);
-  }
-  size_t bytes() const {
-    std::lock_guard lock(mutex_);
-    size_t n = 0;
-    for (const auto& [k, v] : archive_) n += v.size();
-    return n;
-  }
-
- private:
-  mutable std::mutex mutex_;
-  std::map<size_t, std::vector<uchar>> archive_;
 };
 
 /// Results of the asynchronous segmentation stage, keyed by the frame they were computed on.
@@ -218,6 +191,10 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
   ObjectMapper objects(config.objects, camera);
   StageTimings timings;
   LabelArchive label_archive;
+  // Only a tracked run refreshes the map; with a colour layer it needs the colour images anyway.
+  RepairArchive repair_archive(camera.depth_scale, tracker && !config.tsdf.colour_layer
+                                                       ? static_cast<size_t>(config.pipeline.refresh_cache_mb) << 20
+                                                       : 0);
   SegmentationResults seg_results;
   // METHODS.md B1: the temporal label filter sits between segmentation and the TSDF. It sees
   // the labelled frames in frame order (fusion is the only caller). The object map gets the
@@ -301,7 +278,10 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
     } else {
       const TrackResult r = tracker->track(frame);
       item.T_world_camera = r.T_world_camera;
-      if (!r.depth.empty()) frame.depth = r.depth;
+      if (!r.depth.empty()) {
+        repair_archive.store(frame.index, frame.depth, r.depth);
+        frame.depth = r.depth;
+      }
       if (r.is_keyframe) ++keyframes;
       timings.add("tracking", ms_since(t0));
       item.segment = r.is_keyframe && config.segmentation.on_keyframes;
@@ -476,15 +456,21 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
               tbb::make_filter<size_t, std::optional<IntegrationInput>>(
                   tbb::filter_mode::parallel,
                   [&](size_t i) -> std::optional<IntegrationInput> {
+                    const auto pose = pose_at(dataset->records()[i].timestamp);
+                    if (!pose) return std::nullopt;  // skipped in the online pass
                     Frame frame;
                     try {
-                      frame = dataset->load(i);
+                      if (repair_archive.has(i)) {  // depth image + the archived repair fills
+                        frame.index = i;
+                        frame.depth = dataset->load_depth(i);
+                        repair_archive.apply(i, frame.depth);
+                      } else {
+                        frame = dataset->load(i);
+                        if (config.tracking.depth_repair) frame.depth = repair_depth(frame.depth, frame.rgb, repair);
+                      }
                     } catch (const Error&) {
                       return std::nullopt;  // warned and counted in the online pass
                     }
-                    const auto pose = pose_at(frame.timestamp);
-                    if (!pose) return std::nullopt;
-                    if (config.tracking.depth_repair) frame.depth = repair_depth(frame.depth, frame.rgb, repair);
                     IntegrationInput input = make_integration_input(frame, camera.depth, *pose);  // shares the images
                     input.labels = label_archive.find(frame.index);
                     return input;
@@ -571,9 +557,13 @@ nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config
       {"loop_edges", tracker_stats.loop_edges},
       {"map_refreshed_with_optimised_poses", map_refreshed},
       {"max_pose_correction_m", max_pose_correction},
+      {"refresh_archive_mb", (label_archive.bytes() + repair_archive.bytes()) / (1024.0 * 1024.0)},
       {"mesh_vertices", mesh.vertices.size()},
       {"mesh_triangles", mesh.triangles.size()},
+      // online: the stages streaming the frames; end to end: also the final pose-graph pass,
+      // map refresh, meshing, evaluation and outputs.
       {"fps_online", frames_done.load() / std::max(online_s, 1e-9)},
+      {"fps_end_to_end", frames_done.load() / std::max(wall_s, 1e-9)},
       {"wall_s", wall_s},
       {"peak_rss_mb", peak_rss_bytes() / (1024.0 * 1024.0)},
       {"threads", threads},

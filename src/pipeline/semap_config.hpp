@@ -15,14 +15,20 @@ namespace semap {
 struct PipelineConfig {
   int threads = 2;        ///< worker threads for the parallel stages (1 = deterministic)
   int queue_size = 8;     ///< bounded queue length between stages, frames
+  int refresh_cache_mb = 256;  ///< memory for the repair fills the final map refresh reuses
 
   void visit(ParamVisitor& v) {
     v.param("threads", threads, "", "worker threads (1 gives byte-identical outputs)");
     v.param("queue_size", queue_size, "frames", "bounded queue length between stages");
+    v.param("refresh_cache_mb", refresh_cache_mb, "MiB",
+            "memory for the depth-repair fills the final map refresh reuses instead of decoding colour and "
+            "repairing again (frames past it are re-read; 0 = re-read every frame)");
   }
   void validate() const {
     require_param(threads >= 1 && threads <= 256, "pipeline.threads", "must be in [1, 256]");
     require_param(queue_size >= 1, "pipeline.queue_size", "must be >= 1");
+    require_param(refresh_cache_mb >= 0 && refresh_cache_mb <= (1 << 20), "pipeline.refresh_cache_mb",
+                  "must be in [0, 1048576]");
   }
 };
 

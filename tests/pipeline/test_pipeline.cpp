@@ -152,5 +152,34 @@ TEST_F(PipelineTest, CliRunAndConfigErrors) {
   EXPECT_FALSE(std::filesystem::exists(out("cli") / "mesh.ply"));
 }
 
+// The final map refresh rebuilds frames from their depth image plus the archived repair
+// fills instead of decoding colour and repairing again: the map must be the same byte for byte.
+// TUM fr1_rpy's first 100 frames close loops, so the refresh runs.
+TEST(PipelineRefresh, RepairArchiveGivesTheSameMapAsRepairingAgain) {
+  SEMAP_REQUIRE_DATA(tum, "tum_fr1_rpy");
+  Progress::set_mode(-1);
+  test::TempDir dir("semap_refresh");
+  auto run = [&](int cache_mb) {
+    SemapConfig config;
+    config.pipeline.threads = 1;
+    config.pipeline.refresh_cache_mb = cache_mb;
+    RunOptions o;
+    o.dataset = tum;
+    o.out_dir = dir / ("cache_" + std::to_string(cache_mb));
+    o.segmenter = "none";
+    o.max_frames = 100;
+    o.evaluate = false;
+    o.show_progress = false;
+    return run_pipeline(o, config);
+  };
+  const nlohmann::json reread = run(0), archived = run(256);
+  ASSERT_TRUE(archived["summary"]["map_refreshed_with_optimised_poses"].get<bool>()) << "no refresh: nothing compared";
+  EXPECT_EQ(reread["summary"]["refresh_archive_mb"].get<double>(), 0.0);
+  EXPECT_GT(archived["summary"]["refresh_archive_mb"].get<double>(), 0.0);
+  EXPECT_LT(archived["summary"]["refresh_archive_mb"].get<double>(), 20.0) << "fills only, not whole frames";
+  for (const char* f : {"map.semap", "mesh.ply", "trajectory.txt"})
+    EXPECT_EQ(slurp(dir / "cache_0" / f), slurp(dir / "cache_256" / f)) << f;
+}
+
 }  // namespace
 }  // namespace semap
