@@ -16,7 +16,7 @@ namespace {
 // Larger images are treated as corrupt headers (never needed for RGB-D frames).
 constexpr uint64_t kMaxPixels = uint64_t{1} << 26;
 
-uint32_t read_be32(const unsigned char* p) { return (uint32_t{p[0]} << 24) | (p[1] << 16) | (p[2] << 8) | p[3]; }
+using io_detail::read_be32;
 
 // OpenCV/libjpeg decode truncated JPEGs with a grey fill and only a warning, and libpng may
 // decode a PNG cut after its last IDAT; so the container structure is checked first.

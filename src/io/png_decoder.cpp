@@ -17,7 +17,7 @@
 namespace semap {
 namespace {
 
-uint32_t be32(const unsigned char* p) { return (uint32_t{p[0]} << 24) | (uint32_t{p[1]} << 16) | (uint32_t{p[2]} << 8) | p[3]; }
+using io_detail::read_be32;
 
 // Rows are un-filtered in place; this much slack after the buffer lets the SSE2 paths load
 // a whole 4-byte pixel at the end of a 3-byte-per-pixel row.
@@ -113,7 +113,7 @@ bool supported(const Header& h) {
 }
 
 bool crc_ok(const unsigned char* chunk, uint32_t length) {
-  return libdeflate_crc32(0, chunk + 4, size_t{length} + 4) == be32(chunk + 8 + length);
+  return libdeflate_crc32(0, chunk + 4, size_t{length} + 4) == read_be32(chunk + 8 + length);
 }
 
 struct DecompressorDeleter {
@@ -139,15 +139,15 @@ std::optional<cv::Mat> decode_png_fast(std::string_view bytes) {
   bool seen_header = false, seen_end = false;
   for (size_t pos = 8; !seen_end;) {
     if (n - pos < 12) return std::nullopt;
-    const uint32_t length = be32(b + pos);
+    const uint32_t length = read_be32(b + pos);
     if (length > n - pos - 12) return std::nullopt;
     const unsigned char* chunk = b + pos;
     const std::string_view type(bytes.data() + pos + 4, 4);
     const unsigned char* data = chunk + 8;
     if (!seen_header) {
       if (type != "IHDR" || length != 13 || !crc_ok(chunk, length)) return std::nullopt;
-      h.width = be32(data);
-      h.height = be32(data + 4);
+      h.width = read_be32(data);
+      h.height = read_be32(data + 4);
       h.bit_depth = data[8];
       h.colour_type = data[9];
       // compression 0, filter method 0, no interlacing
