@@ -23,7 +23,7 @@
 #include "core/error.hpp"
 #include "core/progress.hpp"
 #include "eval/object_metrics.hpp"
-#include "pipeline/mapper.hpp"
+#include "pipeline/run_pipeline.hpp"
 #include "synth/synth_config.hpp"
 #include "tsdf/map_io.hpp"
 
@@ -85,7 +85,7 @@ int run_child(const Args& a) {
   RunOptions o;
   o.dataset = a.child_dataset;
   o.out_dir = a.child_out;
-  o.poses = "groundtruth";
+  o.poses = PoseSource::groundtruth;
   o.segmenter = "groundtruth";
   o.max_frames = a.child_frames;
   o.evaluate = false;

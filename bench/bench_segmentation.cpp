@@ -107,7 +107,7 @@ int main(int argc, char** argv) {
   std::unique_ptr<YoloSegmenter> yolo_soft_seg, yolo_hard_seg;
   if (std::filesystem::exists(yolo_path)) {
     SegmentationConfig soft = config, hard = config;
-    hard.yolo.nms = "hard";
+    hard.yolo.nms = NmsMethod::hard;
     yolo_soft_seg = std::make_unique<YoloSegmenter>(yolo_path, soft);
     yolo_hard_seg = std::make_unique<YoloSegmenter>(yolo_path, hard);
   }

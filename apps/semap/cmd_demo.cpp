@@ -2,7 +2,7 @@
 #include <cstdio>
 
 #include "apps/semap/commands.hpp"
-#include "pipeline/mapper.hpp"
+#include "pipeline/run_pipeline.hpp"
 #include "pipeline/report.hpp"
 #include "synth/synth_config.hpp"
 
@@ -41,11 +41,11 @@ void add_demo_command(CLI::App& app, CommandRunner& run) {
       RunOptions options;
       options.dataset = dataset;
       options.out_dir = args->out;
-      options.poses = "track";
+      options.poses = PoseSource::track;
       options.segmenter = "groundtruth";
       options.seg_noise = args->seg_noise;
-      const nlohmann::json report = run_pipeline(options, config);
-      std::fputs(summary_table(report).c_str(), stdout);
+      const RunResult result = run_pipeline(options, config);
+      std::fputs(summary_table(to_json(result)).c_str(), stdout);
       const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       std::printf("semap demo: done in %.1f s. Open %s/report.html, or `semap view %s`.\n", wall,
                   args->out.string().c_str(), args->out.string().c_str());

@@ -1,8 +1,8 @@
 #include <cstdio>
 
 #include "apps/semap/commands.hpp"
-#include "pipeline/mapper.hpp"
 #include "pipeline/report.hpp"
+#include "pipeline/run_pipeline.hpp"
 
 namespace semap::app {
 
@@ -13,19 +13,21 @@ void add_run_command(CLI::App& app, CommandRunner& run) {
     std::string config_path;
     double voxel = 0;
     int threads = 0;
+    int64_t max_frames = 0;
   };
   auto args = std::make_shared<Args>();
   cmd->add_option("dataset", args->options.dataset, "dataset folder (TUM, 7-Scenes, YCB-Video, synthetic or dataset.yaml)")->required();
   cmd->add_option("--out", args->options.out_dir, "output folder")->required();
   cmd->add_option("--config", args->config_path, "YAML config (see `semap config --dump`)");
-  cmd->add_option("--poses", args->options.poses, "track (default) or groundtruth")
-      ->check(CLI::IsMember({"track", "groundtruth"}));
-  cmd->add_option("--segmenter", args->options.segmenter, "yolo:MODEL | semantic:MODEL | groundtruth | none");
+  add_enum_option(cmd, "--poses", args->options.poses, kPoseSourceNames, "camera poses");
+  cmd->add_option("--segmenter", args->options.segmenter,
+                  "yolo:MODEL | semantic:MODEL | groundtruth | precomputed:DIR | none (default: the config's "
+                  "segmentation.segmenter, none = geometry and colour only)");
   cmd->add_option("--seg-noise", args->options.seg_noise, "simulate an imperfect segmenter on ground-truth labels (flicker rate 0..1)")
-      ->check(CLI::Range(0.0, 1.0));
-  cmd->add_option("--voxel", args->voxel, "TSDF voxel size in metres (overrides the config)")->check(CLI::PositiveNumber);
-  cmd->add_option("--max-frames", args->options.max_frames, "stop after N frames");
-  cmd->add_option("--threads", args->threads, "worker threads (overrides the config; 1 = deterministic)")->check(CLI::PositiveNumber);
+      ->check(finite_range(0.0, 1.0));
+  cmd->add_option("--voxel", args->voxel, "TSDF voxel size in metres (overrides the config)")->check(finite_range(0.001, 1.0));
+  cmd->add_option("--max-frames", args->max_frames, "stop after N frames (0 = all)")->check(CLI::Range(int64_t{0}, int64_t{1} << 40));
+  cmd->add_option("--threads", args->threads, "worker threads (overrides the config; 1 = deterministic)")->check(CLI::Range(1, 256));
   cmd->add_flag("--no-eval", [args](int64_t) { args->options.evaluate = false; }, "skip evaluation against ground truth");
   cmd->callback([&run, args] {
     run = [args]() -> int {
@@ -33,8 +35,9 @@ void add_run_command(CLI::App& app, CommandRunner& run) {
       if (args->voxel > 0) config.tsdf.voxel_size = args->voxel;
       if (args->threads > 0) config.pipeline.threads = args->threads;
       config.validate();
-      const nlohmann::json report = run_pipeline(args->options, config);
-      std::fputs(summary_table(report).c_str(), stdout);
+      args->options.max_frames = static_cast<size_t>(args->max_frames);
+      const RunResult result = run_pipeline(args->options, config);
+      std::fputs(summary_table(to_json(result)).c_str(), stdout);
       std::printf("outputs in %s\n", args->options.out_dir.string().c_str());
       return 0;
     };

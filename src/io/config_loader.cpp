@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <set>
@@ -11,6 +12,12 @@
 
 namespace semap {
 namespace {
+
+std::string join_choices(std::span<const std::string_view> choices) {
+  std::string all;
+  for (const auto c : choices) all += (all.empty() ? "" : " | ") + std::string(c);
+  return all;
+}
 
 std::string join_key(const std::string& prefix, std::string_view key) {
   return prefix.empty() ? std::string(key) : prefix + "." + std::string(key);
@@ -23,13 +30,24 @@ class YamlLoadVisitor : public ParamVisitor {
       : node_(std::move(node)), source_(std::move(source)), prefix_(std::move(prefix)) {}
 
   void param(std::string_view key, bool& v, std::string_view, std::string_view) override { read(key, v, "a boolean"); }
-  void param(std::string_view key, int& v, std::string_view, std::string_view) override { read(key, v, "an integer"); }
-  void param(std::string_view key, double& v, std::string_view, std::string_view) override {
-    read(key, v, "a number");
+  void param(std::string_view key, int& v, std::string_view, std::string_view, ParamRange<int> range) override {
+    if (read(key, v, "an integer") && !range.contains(v))
+      fail(key, "must be " + in_words(describe(range)) + ", got " + std::to_string(v));
+  }
+  void param(std::string_view key, double& v, std::string_view, std::string_view,
+             ParamRange<double> range) override {
+    if (!read(key, v, "a number")) return;
     if (!std::isfinite(v)) fail(key, "must be a finite number");
+    if (!range.contains(v)) fail(key, "must be " + in_words(describe(range)) + ", got " + format_number(v));
   }
   void param(std::string_view key, std::string& v, std::string_view, std::string_view) override {
     read(key, v, "a string");
+  }
+  void choice(std::string_view key, std::string& v, std::span<const std::string_view> choices,
+              std::string_view) override {
+    if (!read(key, v, "a string")) return;
+    if (std::find(choices.begin(), choices.end(), v) == choices.end())
+      fail(key, "must be one of " + join_choices(choices) + ", got '" + v + "'");
   }
   void section(std::string_view key, std::string_view, const std::function<void(ParamVisitor&)>& body) override {
     known_.insert(std::string(key));
@@ -55,18 +73,23 @@ class YamlLoadVisitor : public ParamVisitor {
   }
 
  private:
+  /// True when the YAML sets the key (v then holds its value).
   template <class T>
-  void read(std::string_view key, T& v, const char* what) {
+  bool read(std::string_view key, T& v, const char* what) {
     known_.insert(std::string(key));
-    if (!node_ || !node_.IsMap()) return;
+    if (!node_ || !node_.IsMap()) return false;
     const YAML::Node n = node_[std::string(key)];
-    if (!n) return;
+    if (!n) return false;
     if (!n.IsScalar()) fail(key, std::string("must be ") + what);
     try {
       v = n.as<T>();
     } catch (const YAML::Exception&) {
       fail(key, std::string("must be ") + what + ", got '" + n.Scalar() + "'");
     }
+    return true;
+  }
+  static std::string in_words(const std::string& range) {
+    return range.front() == '[' || range.front() == '(' ? "in " + range : range;
   }
   [[noreturn]] void fail(std::string_view key, const std::string& why) const {
     throw Error(source_, "config key '" + join_key(prefix_, key) + "' " + why);
@@ -83,21 +106,24 @@ class YamlDumpVisitor : public ParamVisitor {
   void param(std::string_view key, bool& v, std::string_view u, std::string_view d) override {
     line(key, v ? "true" : "false", u, d);
   }
-  void param(std::string_view key, int& v, std::string_view u, std::string_view d) override {
-    line(key, std::to_string(v), u, d);
+  void param(std::string_view key, int& v, std::string_view u, std::string_view d, ParamRange<int> range) override {
+    line(key, std::to_string(v), u, d, describe(range));
   }
-  void param(std::string_view key, double& v, std::string_view u, std::string_view d) override {
+  void param(std::string_view key, double& v, std::string_view u, std::string_view d,
+             ParamRange<double> range) override {
     std::ostringstream s;
     s.precision(10);
     s << v;
     std::string t = s.str();
     if (t.find_first_of(".eEn") == std::string::npos) t += ".0";
-    line(key, t, u, d);
+    line(key, t, u, d, describe(range));
   }
   void param(std::string_view key, std::string& v, std::string_view u, std::string_view d) override {
-    YAML::Emitter e;
-    e << YAML::DoubleQuoted << v;
-    line(key, e.c_str(), u, d);
+    line(key, quoted(v), u, d);
+  }
+  void choice(std::string_view key, std::string& v, std::span<const std::string_view> choices,
+              std::string_view d) override {
+    line(key, quoted(v), "", d, join_choices(choices));
   }
   void section(std::string_view key, std::string_view doc, const std::function<void(ParamVisitor&)>& body) override {
     if (!doc.empty()) out_ << pad() << "# " << doc << "\n";
@@ -110,11 +136,20 @@ class YamlDumpVisitor : public ParamVisitor {
 
  private:
   std::string pad() const { return std::string(indent_, ' '); }
-  void line(std::string_view key, const std::string& value, std::string_view unit, std::string_view doc) {
+  static std::string quoted(const std::string& v) {
+    YAML::Emitter e;
+    e << YAML::DoubleQuoted << v;
+    return e.c_str();
+  }
+  /// key: value  # doc [unit; range]
+  void line(std::string_view key, const std::string& value, std::string_view unit, std::string_view doc,
+            const std::string& range = {}) {
     out_ << pad() << key << ": " << value;
-    if (!doc.empty() || !unit.empty()) {
+    if (!doc.empty() || !unit.empty() || !range.empty()) {
       out_ << "  # " << doc;
-      if (!unit.empty()) out_ << " [" << unit << "]";
+      if (!unit.empty() || !range.empty()) {
+        out_ << " [" << unit << (!unit.empty() && !range.empty() ? "; " : "") << range << "]";
+      }
     }
     out_ << "\n";
   }

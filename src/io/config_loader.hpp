@@ -9,8 +9,6 @@
 
 namespace semap {
 
-using ParamTree = std::function<void(ParamVisitor&)>;
-
 /// Applies the YAML file's values over the defaults held by `tree`. Throws semap::Error
 /// naming the file and the key for unknown keys, wrong types or malformed YAML.
 void load_config_file(const std::filesystem::path& yaml_path, const ParamTree& tree);

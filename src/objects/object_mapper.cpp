@@ -134,54 +134,68 @@ std::vector<Eigen::Vector3f> largest_cluster(const std::vector<Eigen::Vector3f>&
   return out;
 }
 
-nlohmann::json ObjectMapper::to_json() const {
-  nlohmann::json objects = nlohmann::json::array();
+std::vector<ObjectSummary> ObjectMapper::summaries() const {
+  std::vector<ObjectSummary> out;
   for (const auto& inst : map_.instances()) {
     if (inst.points.empty()) continue;
-    const ClassId cls = inst.class_id();
-    nlohmann::json distribution = nlohmann::json::object();
+    ObjectSummary o;
+    o.id = inst.id;
+    o.class_id = inst.class_id();
     const auto mean = inst.mean_scores();  // [0] = "other" residual (C5)
     for (size_t k = 1; k < mean.size(); ++k)
-      if (mean[k] >= 0.005) distribution[std::string(class_name(static_cast<ClassId>(k - 1)))] = mean[k];
-    if (mean[0] >= 0.005) {
-      const std::string other(class_name(id(Label::kOther)));
-      distribution[other] = distribution.value(other, 0.0) + mean[0];
-    }
+      if (mean[k] >= 0.005) o.class_distribution[std::string(class_name(static_cast<ClassId>(k - 1)))] = mean[k];
+    if (mean[0] >= 0.005) o.class_distribution[std::string(class_name(id(Label::kOther)))] += mean[0];
     // Boxes describe the object's body: its largest cluster, trimmed of stray points.
     const std::vector<Eigen::Vector3f> body = largest_cluster(inst.points, config_.box_cluster_distance);
-    Eigen::Vector3f lo, hi;
     std::vector<double> coordinate(body.size());
     for (int a = 0; a < 3; ++a) {
       for (size_t i = 0; i < body.size(); ++i) coordinate[i] = body[i][a];
       const auto [l, h] = trimmed_range(coordinate, config_.box_trim_fraction);
-      lo[a] = static_cast<float>(l);
-      hi[a] = static_cast<float>(h);
+      o.aabb_min[a] = static_cast<float>(l);
+      o.aabb_max[a] = static_cast<float>(h);
     }
-    const OrientedBox obb = fit_oriented_box(body, config_.box_trim_fraction);
-    std::vector<float> rotation;
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) rotation.push_back(obb.rotation(r, c));
-    const Eigen::Vector3f centroid = inst.centroid();
-    objects.push_back({{"id", inst.id},
-                       {"class", std::string(class_name(cls))},
-                       {"class_id", cls},
-                       {"class_distribution", distribution},
-                       {"n", inst.n},
-                       {"association_count", inst.total_associations},
-                       {"centroid", {centroid.x(), centroid.y(), centroid.z()}},
-                       {"aabb", {{"min", {lo.x(), lo.y(), lo.z()}}, {"max", {hi.x(), hi.y(), hi.z()}}}},
-                       {"obb",
-                        {{"center", {obb.center.x(), obb.center.y(), obb.center.z()}},
-                         {"extent", {obb.extent.x(), obb.extent.y(), obb.extent.z()}},
-                         {"rotation", rotation}}},
-                       {"point_count", inst.points.size()},
-                       {"points_file", "objects/" + std::to_string(inst.id) + ".ply"},
-                       {"first_seen", inst.first_frame},
-                       {"last_seen", inst.last_frame},
-                       {"state", state_name(inst.state)}});
+    o.box = fit_oriented_box(body, config_.box_trim_fraction);
+    o.centroid = inst.centroid();
+    o.points = inst.points;
+    o.colours = inst.colours;
+    o.merge_count = inst.n;
+    o.associations = inst.total_associations;
+    o.first_frame = inst.first_frame;
+    o.last_frame = inst.last_frame;
+    o.state = state_name(inst.state);
+    out.push_back(std::move(o));
   }
-  return {{"objects", objects}};
+  return out;
 }
+
+nlohmann::json to_json(const ObjectSummary& o) {
+  auto vec = [](const Eigen::Vector3f& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); };
+  std::vector<float> rotation;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) rotation.push_back(o.box.rotation(r, c));
+  return {{"id", o.id},
+          {"class", std::string(class_name(o.class_id))},
+          {"class_id", o.class_id},
+          {"class_distribution", o.class_distribution},
+          {"n", o.merge_count},
+          {"association_count", o.associations},
+          {"centroid", vec(o.centroid)},
+          {"aabb", {{"min", vec(o.aabb_min)}, {"max", vec(o.aabb_max)}}},
+          {"obb", {{"center", vec(o.box.center)}, {"extent", vec(o.box.extent)}, {"rotation", rotation}}},
+          {"point_count", o.points.size()},
+          {"points_file", "objects/" + std::to_string(o.id) + ".ply"},
+          {"first_seen", o.first_frame},
+          {"last_seen", o.last_frame},
+          {"state", o.state}};
+}
+
+nlohmann::json objects_json(const std::vector<ObjectSummary>& objects) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const auto& o : objects) list.push_back(to_json(o));
+  return {{"objects", list}};
+}
+
+nlohmann::json ObjectMapper::to_json() const { return objects_json(summaries()); }
 
 void ObjectMapper::write(const std::filesystem::path& out_dir) const {
   std::error_code ec;

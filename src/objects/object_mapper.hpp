@@ -3,6 +3,8 @@
 // are associated with the map; every T frames the map is optimised by association counts.
 #include <Eigen/Core>
 #include <filesystem>
+#include <map>
+#include <string>
 #include <nlohmann/json.hpp>
 #include <vector>
 
@@ -24,6 +26,32 @@ struct ObjectMapperTimings {
   size_t optimisations = 0;
 };
 
+/// Oriented box of a point set by PCA: centre, full side lengths, world_from_box rotation.
+struct OrientedBox {
+  Eigen::Vector3f center = Eigen::Vector3f::Zero();
+  Eigen::Vector3f extent = Eigen::Vector3f::Zero();
+  Eigen::Matrix3f rotation = Eigen::Matrix3f::Identity();
+};
+
+/// One object of the map as a user reads it (world frame, metres): what objects.json holds.
+struct ObjectSummary {
+  uint32_t id = 0;
+  ClassId class_id = 0;
+  std::map<std::string, double> class_distribution;  ///< class name -> mean score (>= 0.005)
+  Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
+  OrientedBox box;  ///< of the object's body (largest cluster, trimmed)
+  Eigen::Vector3f aabb_min = Eigen::Vector3f::Zero(), aabb_max = Eigen::Vector3f::Zero();
+  std::vector<Eigen::Vector3f> points;  ///< one per occupied object voxel
+  std::vector<Rgb8> colours;
+  int merge_count = 0;   ///< segments merged in (C4 n)
+  int associations = 0;  ///< association count over the run (C5 s)
+  size_t first_frame = 0, last_frame = 0;
+  std::string state;     ///< new | stable
+};
+nlohmann::json to_json(const ObjectSummary& object);
+/// The objects.json document ({"objects": [...]}, schema in SHARED_FORMATS.md).
+nlohmann::json objects_json(const std::vector<ObjectSummary>& objects);
+
 class ObjectMapper {
  public:
   ObjectMapper(const ObjectsConfig& config, const CameraModel& camera);
@@ -44,6 +72,8 @@ class ObjectMapper {
   void write(const std::filesystem::path& out_dir) const;
   /// The objects.json document.
   nlohmann::json to_json() const;
+  /// Every non-empty instance, with its box and class distribution.
+  std::vector<ObjectSummary> summaries() const;
 
   const std::vector<ObjectInstance>& instances() const { return map_.instances(); }
   const ObjectMap& map() const { return map_; }
@@ -64,12 +94,6 @@ class ObjectMapper {
   bool finished_ = false;
 };
 
-/// Oriented box of a point set by PCA: centre, full side lengths, world_from_box rotation.
-struct OrientedBox {
-  Eigen::Vector3f center = Eigen::Vector3f::Zero();
-  Eigen::Vector3f extent = Eigen::Vector3f::Zero();
-  Eigen::Matrix3f rotation = Eigen::Matrix3f::Identity();
-};
 /// `trim_fraction` of the points is ignored at each end of every box axis (0 = exact hull).
 OrientedBox fit_oriented_box(const std::vector<Eigen::Vector3f>& points, double trim_fraction = 0.0);
 /// The points of the largest cluster whose members are linked by chains of neighbours closer than

@@ -2,6 +2,7 @@
 // A bounded blocking queue between pipeline stages: producers block when it is full, so
 // memory stays bounded however slow a consumer is (issue 8).
 #include <condition_variable>
+#include <algorithm>
 #include <deque>
 #include <mutex>
 #include <optional>
@@ -31,6 +32,21 @@ class BoundedQueue {
     high_water_ = std::max(high_water_, items_.size());
     not_empty_.notify_one();
     return true;
+  }
+  /// Never blocks: when the queue is full its OLDEST item is removed to make room and returned.
+  /// A closed queue takes nothing (the item itself is returned).
+  std::optional<T> push_drop_oldest(T item) {
+    std::lock_guard lock(mutex_);
+    if (closed_) return std::optional<T>(std::move(item));
+    std::optional<T> dropped;
+    if (items_.size() >= capacity_) {
+      dropped = std::move(items_.front());
+      items_.pop_front();
+    }
+    items_.push_back(std::move(item));
+    high_water_ = std::max(high_water_, items_.size());
+    not_empty_.notify_one();
+    return dropped;
   }
   /// Blocks until an item arrives; nullopt once closed and drained.
   std::optional<T> pop() {

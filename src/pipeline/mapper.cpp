@@ -1,33 +1,17 @@
 #include "pipeline/mapper.hpp"
 
 #include <spdlog/spdlog.h>
-#include <tbb/global_control.h>
-#include <tbb/parallel_pipeline.h>
 
 #include <atomic>
 #include <condition_variable>
-#include <functional>
-#include <map>
 #include <mutex>
-#include <opencv2/imgcodecs.hpp>
-#include <thread>
-#include <unordered_map>
 
 #include "core/error.hpp"
-#include "core/paths.hpp"
-#include "core/progress.hpp"
-#include "eval/object_metrics.hpp"
-#include "eval/semantic_metrics.hpp"
-#include "eval/trajectory_metrics.hpp"
-#include "io/dataset.hpp"
-#include "io/ply_io.hpp"
-#include "io/trajectory_io.hpp"
 #include "objects/object_mapper.hpp"
-#include "pipeline/bounded_queue.hpp"
+#include "pipeline/map_refresh.hpp"
 #include "pipeline/refresh_archive.hpp"
-#include "pipeline/report.hpp"
-#include "pipeline/simulated_segmenter.hpp"
-#include "pipeline/stage_timer.hpp"
+#include "pipeline/stage.hpp"
+#include "segmentation/groundtruth_segmenter.hpp"
 #include "segmentation/segmenter_factory.hpp"
 #include "segmentation/temporal_filter.hpp"
 #include "tracking/depth_repair.hpp"
@@ -38,36 +22,15 @@ namespace semap {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
-/// A tracked frame on its way to fusion.
+/// A located frame on its way to fusion. `frame.index` is the Mapper's sequence number.
 struct TrackedFrame {
-  Frame frame;                 ///< depth is the repaired depth used for tracking
+  Frame frame;  ///< depth is the repaired depth used for tracking
+  cv::Mat decoded_depth;  ///< the depth as given (before repair), for the refresh archive
   Pose T_world_camera;
-  bool segment = false;        ///< sent to the segmenter; fusion waits for its labels
-  bool map_objects = false;    ///< its segmentation also feeds the object map
-};
-
-/// A frame as read from the dataset; nullopt when it was unreadable (skipped).
-struct LoadedFrame {
-  size_t index = 0;
-  std::optional<Frame> frame;
-};
-
-/// Joins the stage threads when the pipeline scope ends, normally or by an exception
-/// (after on_exit has closed the queues the threads wait on).
-struct StageThreads {
-  std::vector<std::thread> threads;
-  std::function<void()> on_exit;
-  void join_all() {
-    for (std::thread& t : threads)
-      if (t.joinable()) t.join();
-  }
-  ~StageThreads() {
-    if (on_exit) on_exit();
-    join_all();
-  }
+  bool segment = false;      ///< its labels are on their way; fusion waits for them
+  bool map_objects = false;  ///< its segmentation also feeds the object map (C2-C4)
 };
 
 /// What fusion hands to the object map.
@@ -78,28 +41,23 @@ struct ObjectWork {
   bool keyframe = true;  ///< false: a segmented frame between object keyframes (ObjectMapper::accumulate)
 };
 
-/// Results of the asynchronous segmentation stage, keyed by the frame they were computed on.
+/// Segmentation results keyed by sequence number, from the segmentation stage (or the caller)
+/// to fusion. nullopt inside means "dropped or failed".
 class SegmentationResults {
  public:
-  void put(size_t frame_index, std::optional<SegmentationResult> result) {
+  void put(size_t sequence, std::optional<SegmentationResult> result) {
     std::lock_guard lock(mutex_);
-    results_[frame_index] = std::move(result);
+    results_[sequence] = std::move(result);
     ready_.notify_all();
   }
-  /// The result for frame_index if it has arrived (nullopt inside means "dropped / failed").
-  std::optional<std::optional<SegmentationResult>> take(size_t frame_index) {
-    std::lock_guard lock(mutex_);
-    auto it = results_.find(frame_index);
+  /// The result if it has arrived (blocking: waits for it).
+  std::optional<std::optional<SegmentationResult>> take(size_t sequence, bool block) {
+    std::unique_lock lock(mutex_);
+    if (block) ready_.wait(lock, [&] { return results_.count(sequence) > 0; });
+    const auto it = results_.find(sequence);
     if (it == results_.end()) return std::nullopt;
     auto out = std::move(it->second);
     results_.erase(it);
-    return out;
-  }
-  std::optional<SegmentationResult> wait_take(size_t frame_index) {
-    std::unique_lock lock(mutex_);
-    ready_.wait(lock, [&] { return results_.count(frame_index) > 0; });
-    auto out = std::move(results_[frame_index]);
-    results_.erase(frame_index);
     return out;
   }
 
@@ -109,483 +67,504 @@ class SegmentationResults {
   std::map<size_t, std::optional<SegmentationResult>> results_;
 };
 
-std::unique_ptr<Segmenter> build_segmenter(const RunOptions& options, const SemapConfig& config,
-                                           const DatasetReader& dataset) {
-  const std::string spec = options.segmenter.empty() ? config.segmentation.segmenter : options.segmenter;
-  const bool simulated = options.seg_noise > 0;
-  if ((spec == "groundtruth" || simulated) && !dataset.has_label_ground_truth())
-    throw Error(dataset.root(), "--segmenter groundtruth / --seg-noise need per-frame label images, this dataset has none");
-  if (simulated) {
-    SegmentationNoiseParams noise = config.simulated_segmentation;
-    noise.flicker_rate = options.seg_noise;
-    return std::make_unique<SimulatedSegmenter>(make_segmenter("groundtruth", config.segmentation, dataset.camera()),
-                                                noise, 1);
-  }
-  return make_segmenter(spec, config.segmentation, dataset.camera());
+/// What the Mapper remembers of every frame it was given.
+struct FrameLog {
+  size_t frame_index = 0;  ///< the caller's Frame::index
+  double timestamp = 0.0;
+  Pose T_world_camera_online = Pose::Identity();
+  bool fused = false;
+};
+
+FrameStatus status_of(const TrackResult& r) {
+  if (r.status == TrackingStatus::lost) return FrameStatus::lost;
+  if (r.status == TrackingStatus::relocalised) return FrameStatus::relocalised;
+  return r.is_keyframe ? FrameStatus::keyframe : FrameStatus::tracking;
 }
 
-/// Ground-truth poses when present, or nullopt.
-std::optional<Pose> usable_pose(const std::optional<Pose>& pose) {
-  if (pose && is_valid_pose(*pose, 1e-4)) return pose;
-  return std::nullopt;
+DepthRepairParams repair_params(const TrackingConfig& c) {
+  return {c.depth_repair_radius, c.depth_repair_gray_threshold, c.depth_repair_min_support};
 }
 
-nlohmann::json objects_per_class(const ObjectMapper& objects) {
-  nlohmann::json j = nlohmann::json::object();
-  for (const auto& inst : objects.instances()) {
-    const std::string name(class_name(inst.class_id()));
-    j[name] = j.value(name, 0) + 1;
-  }
-  return j;
-}
-
-std::vector<ReportObject> report_objects(const nlohmann::json& objects_json) {
-  std::vector<ReportObject> out;
-  for (const auto& o : objects_json.value("objects", nlohmann::json::array())) {
-    ReportObject r;
-    r.id = o.value("id", 0u);
-    r.class_id = static_cast<ClassId>(o.value("class_id", 0));
-    const auto& obb = o["obb"];
-    Eigen::Vector3d c(obb["center"][0], obb["center"][1], obb["center"][2]);
-    Eigen::Vector3d e(obb["extent"][0], obb["extent"][1], obb["extent"][2]);
-    Eigen::Matrix3d R;
-    for (int i = 0; i < 9; ++i) R(i / 3, i % 3) = obb["rotation"][i];
-    for (int k = 0; k < 8; ++k) {
-      const Eigen::Vector3d s((k & 1) ? 0.5 : -0.5, (k & 2) ? 0.5 : -0.5, (k & 4) ? 0.5 : -0.5);
-      r.corners[k] = c + R * s.cwiseProduct(e);
-    }
-    out.push_back(r);
-  }
-  return out;
+std::unique_ptr<Segmenter> segmenter_from_config(const SemapConfig& config, const CameraModel& camera) {
+  return make_segmenter(config.segmentation.segmenter, config.segmentation, camera);
 }
 
 }  // namespace
 
-nlohmann::json run_pipeline(const RunOptions& options, const SemapConfig& config) {
-  config.validate();
-  const auto wall_start = Clock::now();
-  const int threads = config.pipeline.threads;
-  tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, threads);
-  const bool sequential = threads == 1;
-
-  auto dataset = open_dataset(options.dataset);
-  const CameraModel& camera = dataset->camera();
-  const size_t frame_count =
-      options.max_frames > 0 ? std::min(options.max_frames, dataset->size()) : dataset->size();
-  if (frame_count == 0) throw Error(options.dataset, "dataset has no frames");
-  const bool use_gt_poses = options.poses == "groundtruth";
-  if (use_gt_poses && !dataset->has_ground_truth())
-    throw Error(options.dataset, "--poses groundtruth needs a ground-truth trajectory, this dataset has none");
-
-  std::error_code ec;
-  std::filesystem::create_directories(options.out_dir, ec);
-  if (ec) throw Error(options.out_dir, "cannot create output folder: " + ec.message());
-
-  std::unique_ptr<Segmenter> segmenter = build_segmenter(options, config, *dataset);
-  // Ground-truth / simulated / precomputed labels cost nothing: label every frame for the
-  // TSDF; the object map still takes every N-th frame and keyframes (its C2 step is the cost).
-  const std::string spec = options.segmenter.empty() ? config.segmentation.segmenter : options.segmenter;
-  const bool label_every_frame = segmenter && (options.seg_noise > 0 || spec == "groundtruth" || spec.rfind("precomputed:", 0) == 0);
-  std::unique_ptr<Tracker> tracker = use_gt_poses ? nullptr : std::make_unique<Tracker>(config.tracking, camera);
-  SemanticTsdf tsdf(config.tsdf);
-  ObjectMapper objects(config.objects, camera);
-  StageTimings timings;
-  LabelArchive label_archive;
-  // Only a tracked run refreshes the map; with a colour layer it needs the colour images anyway.
-  RepairArchive repair_archive(camera.depth_scale, tracker && !config.tsdf.colour_layer
-                                                       ? static_cast<size_t>(config.pipeline.refresh_cache_mb) << 20
-                                                       : 0);
-  SegmentationResults seg_results;
-  // METHODS.md B1: the temporal label filter sits between segmentation and the TSDF. It sees
-  // the labelled frames in frame order (fusion is the only caller). The object map gets the
-  // unfiltered masks: dropping border pixels there only shrinks instances (C2 does its own
-  // consistency through association counts, C5).
-  TemporalLabelFilter temporal_filter(config.segmentation.temporal, camera.depth);
-  const DepthRepairParams repair{config.tracking.depth_repair_radius, config.tracking.depth_repair_gray_threshold,
-                                 config.tracking.depth_repair_min_support};
-
-  std::atomic<size_t> frames_done{0}, skipped_frames{0}, segmented_frames{0}, dropped_segmentations{0};
-  std::atomic<size_t> keyframes{0}, objects_processed{0}, objects_in_map{0}, skipped_accumulations{0};
-  Trajectory online_trajectory;
-  std::vector<size_t> online_frame_indices;  // frame of each online_trajectory entry
-
-  // --- stage bodies -------------------------------------------------------------------
-  auto run_segmentation = [&](const Frame& frame) -> std::optional<SegmentationResult> {
-    const auto t0 = Clock::now();
-    try {
-      SegmentationResult r = segmenter->segment(frame);
-      r.frame_index = frame.index;
-      timings.add("segmentation", ms_since(t0));
-      return r;
-    } catch (const Error& e) {
-      spdlog::warn("segmentation of frame {} failed: {}", frame.index, e.what());
-      return std::nullopt;
-    }
-  };
-  auto fuse = [&](TrackedFrame& item, const std::optional<SegmentationResult>& seg) {
-    const auto t0 = Clock::now();
-    IntegrationInput input = make_integration_input(item.frame, camera.depth, item.T_world_camera);
-    input.labels = cv::Mat();
-    if (seg && seg->has_labels()) {
-      input.labels = temporal_filter.apply(seg->labels, item.frame.depth, item.T_world_camera);
-      input.confidence = seg->confidence;
-      input.probabilities = seg->probabilities;
-      if (tracker) label_archive.store(item.frame.index, input.labels);  // only a tracked run refreshes
-    }
-    tsdf.integrate(input);
-    timings.add("tsdf_integration", ms_since(t0));
-  };
-  auto map_objects = [&](ObjectWork& work) {
-    const auto t0 = Clock::now();
-    if (!work.keyframe) {
-      objects.accumulate(work.frame, work.segmentation, work.T_world_camera);
-      timings.add("object_accumulate", ms_since(t0));
-      return;
-    }
-    objects.process(work.frame, work.segmentation, work.T_world_camera);
-    timings.add("object_map", ms_since(t0));
-    ++objects_processed;
-    objects_in_map = objects.instances().size();
-  };
-
-  // Reads frame i; nullopt (counted, warned) for an unreadable frame (issue 8).
-  auto load_frame = [&](size_t i) -> std::optional<Frame> {
-    const auto t0 = Clock::now();
-    try {
-      Frame frame = dataset->load(i);
-      timings.add("read", ms_since(t0));
-      return frame;
-    } catch (const Error& e) {
-      spdlog::warn("skipping frame {}: {}", i, e.what());
-      ++skipped_frames;
-      return std::nullopt;
-    }
-  };
-  // Repairs and tracks a loaded frame. Returns nullopt for a skipped frame.
-  auto track_frame = [&](Frame frame) -> std::optional<TrackedFrame> {
-    const auto t0 = Clock::now();
-    TrackedFrame item;
-    if (use_gt_poses) {
-      const auto pose = usable_pose(frame.gt_T_world_camera);
-      if (!pose) {
-        spdlog::warn("skipping frame {}: no valid ground-truth pose", frame.index);
-        ++skipped_frames;
-        return std::nullopt;
-      }
-      item.T_world_camera = *pose;
-      if (config.tracking.depth_repair) frame.depth = repair_depth(frame.depth, frame.rgb, repair);
-      timings.add("depth_repair", ms_since(t0));
-    } else {
-      const TrackResult r = tracker->track(frame);
-      item.T_world_camera = r.T_world_camera;
-      if (!r.depth.empty()) {
-        repair_archive.store(frame.index, frame.depth, r.depth);
-        frame.depth = r.depth;
-      }
-      if (r.is_keyframe) ++keyframes;
-      timings.add("tracking", ms_since(t0));
-      item.segment = r.is_keyframe && config.segmentation.on_keyframes;
-    }
-    online_trajectory.push_back({frame.timestamp, item.T_world_camera});
-    online_frame_indices.push_back(frame.index);
-    item.map_objects = segmenter && (item.segment || frame.index % config.segmentation.every_n_frames == 0);
-    item.segment = item.map_objects || label_every_frame;
-    item.frame = std::move(frame);
-    return item;
-  };
-
-  Progress progress("semap run", frame_count);
-  auto progress_extra = [&] { return "objects " + std::to_string(objects_in_map.load()); };
-
-  if (sequential) {
-    // One thread: the same order every time -> byte-identical outputs (issue 8).
-    for (size_t i = 0; i < frame_count; ++i) {
-      auto frame = load_frame(i);
-      auto item = frame ? track_frame(std::move(*frame)) : std::nullopt;
-      if (item) {
-        std::optional<SegmentationResult> seg;
-        if (item->segment) {
-          seg = run_segmentation(item->frame);
-          ++segmented_frames;
-        }
-        fuse(*item, seg);
-        if (seg && (item->map_objects || objects.accumulates())) {
-          ObjectWork work{std::move(item->frame), std::move(*seg), item->T_world_camera, item->map_objects};
-          map_objects(work);
-        }
-      }
-      frames_done = i + 1;
-      if (options.show_progress) progress.update(i + 1, progress_extra());
-    }
-  } else {
-    // Stages on their own threads joined by bounded queues. Tracking never waits for the
-    // network: frames to segment go to a small queue and are dropped when it is full; fusion
-    // holds such frames aside until their labels arrive and meanwhile fuses the others.
-    BoundedQueue<TrackedFrame> fusion_queue(config.pipeline.queue_size);
-    BoundedQueue<Frame> segmentation_queue(static_cast<size_t>(config.segmentation.async_queue_size));
-    BoundedQueue<ObjectWork> object_queue(config.pipeline.queue_size);
-    BoundedQueue<LoadedFrame> read_queue(config.pipeline.queue_size);
-    std::atomic<size_t> segmentation_in_flight{0};
-    // On an exception in the tracking loop every queue is closed and every stage joined, so
-    // the error reaches the caller instead of std::terminate.
-    StageThreads threads_guard;
-    threads_guard.on_exit = [&] {
-      read_queue.close();
-      segmentation_queue.close();
-      fusion_queue.close();
-      object_queue.close();
-    };
-
-    threads_guard.threads.emplace_back([&] {
-      while (auto frame = segmentation_queue.pop()) {
-        seg_results.put(frame->index, run_segmentation(*frame));
-        --segmentation_in_flight;
-      }
-    });
-    threads_guard.threads.emplace_back([&] {
-      while (auto work = object_queue.pop()) map_objects(*work);
-    });
-    threads_guard.threads.emplace_back([&] {
-      std::map<size_t, TrackedFrame> waiting;  // frames held until their labels arrive
-      auto fuse_ready = [&](bool block) {
-        for (auto it = waiting.begin(); it != waiting.end();) {
-          auto result = block ? std::optional(seg_results.wait_take(it->first)) : seg_results.take(it->first);
-          if (!result) { ++it; continue; }
-          fuse(it->second, *result);
-          if (*result && it->second.map_objects) {
-            object_queue.push({std::move(it->second.frame), std::move(**result), it->second.T_world_camera, true});
-          } else if (*result && objects.accumulates()) {
-            // Points between object keyframes are best effort: skipped when the object stage is busy.
-            if (!object_queue.try_push({std::move(it->second.frame), std::move(**result), it->second.T_world_camera, false}))
-              ++skipped_accumulations;
-          }
-          it = waiting.erase(it);
-        }
-      };
-      while (auto item = fusion_queue.pop()) {
-        if (item->segment) {
-          waiting.emplace(item->frame.index, std::move(*item));
-        } else {
-          fuse(*item, std::nullopt);
-        }
-        fuse_ready(false);
-      }
-      fuse_ready(true);
-      object_queue.close();
-    });
-
-    // Reading (PNG decoding) runs ahead of tracking on its own thread, in frame order.
-    threads_guard.threads.emplace_back([&] {
-      for (size_t i = 0; i < frame_count; ++i)
-        if (!read_queue.push({i, load_frame(i)})) break;
-      read_queue.close();
-    });
-
-    while (auto loaded = read_queue.pop()) {
-      auto item = loaded->frame ? track_frame(std::move(*loaded->frame)) : std::nullopt;
-      if (item) {
-        if (item->segment) {
-          // Non-blocking hand-off: drop the request when the network is still busy.
-          if (segmentation_in_flight.load() < segmentation_queue.capacity()) {
-            ++segmentation_in_flight;
-            ++segmented_frames;
-            segmentation_queue.push(item->frame);
-          } else {
-            item->segment = item->map_objects = false;
-            ++dropped_segmentations;
-          }
-        }
-        fusion_queue.push(std::move(*item));
-      }
-      frames_done = loaded->index + 1;
-      if (options.show_progress) progress.update(frames_done, progress_extra());
-    }
-    segmentation_queue.close();
-    fusion_queue.close();
-    threads_guard.join_all();
+const char* to_string(FrameStatus status) {
+  switch (status) {
+    case FrameStatus::tracking: return "tracking";
+    case FrameStatus::keyframe: return "keyframe";
+    case FrameStatus::lost: return "lost";
+    case FrameStatus::relocalised: return "relocalised";
   }
-  const double online_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
+  return "?";
+}
 
-  // --- final pose-graph pass and map refresh -------------------------------------------
-  Trajectory trajectory = online_trajectory;
-  bool map_refreshed = false;
-  TrackerStats tracker_stats;
-  double max_pose_correction = 0.0;
+SegmentationResult segmentation_from_label_images(const cv::Mat& labels, const cv::Mat& instances) {
+  return result_from_label_images(labels, instances);
+}
+
+struct Mapper::Impl {
+  Impl(const SemapConfig& c, const CameraModel& cam, std::unique_ptr<Segmenter> seg)
+      : config(c),
+        camera(cam),
+        segmenter(seg ? std::move(seg) : segmenter_from_config(c, cam)),
+        tsdf(c.tsdf),
+        objects(c.objects, cam),
+        temporal_filter(c.segmentation.temporal, cam.depth),
+        repair_archive(cam.depth_scale, static_cast<size_t>(c.pipeline.refresh_cache_mb) << 20),
+        frame_archive(static_cast<size_t>(c.pipeline.refresh_cache_mb) << 20) {
+    const bool threaded = c.pipeline.threads > 1;
+    const auto queue = static_cast<size_t>(c.pipeline.queue_size);
+    objects_stage = std::make_unique<Stage<ObjectWork>>(threaded, queue, [this](ObjectWork& w) { map_objects(w); });
+    fusion_stage = std::make_unique<Stage<TrackedFrame>>(
+        threaded, queue, [this](TrackedFrame& f) { on_located(f); }, [this] { fuse_waiting(true); });
+    segmentation_stage = std::make_unique<Stage<Frame>>(
+        threaded, static_cast<size_t>(c.segmentation.async_queue_size), [this](Frame& f) { segment(f); });
+  }
+
+  // --- tracking (caller's thread) ---
+  void check_frame(const Frame& frame) const;
+  TrackedFrame locate(const Frame& frame, const std::optional<Pose>& given, FrameResult& result);
+  // --- segmentation ---
+  void schedule_segmentation(TrackedFrame& item, bool keyframe, std::optional<SegmentationResult> given);
+  void segment(Frame& frame);
+  // --- fusion (fusion stage) ---
+  void on_located(TrackedFrame& item);
+  void fuse_waiting(bool block);
+  void fuse(TrackedFrame& item, const std::optional<SegmentationResult>& seg);
+  void archive_for_refresh(const TrackedFrame& item);
+  void hand_to_objects(TrackedFrame& item, SegmentationResult seg);
+  void map_objects(ObjectWork& work);
+  // --- finish ---
+  Trajectory current_trajectory() const;
+  void refresh_map(const Trajectory& optimised);
+  std::optional<IntegrationInput> refresh_input(size_t sequence, const Pose& T_world_camera) const;
+
+  const SemapConfig config;
+  const CameraModel camera;
+  std::unique_ptr<Segmenter> segmenter;
+  std::unique_ptr<Tracker> tracker;  ///< made at the first frame unless the caller gives poses
+  std::optional<bool> external_poses;
+  mutable std::mutex tracker_mutex;
+  mutable SemanticTsdf tsdf;  ///< meshing is incremental (mutates the mesher), under tsdf_mutex
+  mutable std::mutex tsdf_mutex;
+  ObjectMapper objects;
+  mutable std::mutex objects_mutex;
+  TemporalLabelFilter temporal_filter;  ///< fusion thread only (sees frames in order)
+  SegmentationResults seg_results;
+  LabelArchive label_archive;
+  RepairArchive repair_archive;
+  FrameArchive frame_archive;
+  FrameReloader reloader;
+  StageTimings timings;
+  mutable std::mutex log_mutex;
+  std::vector<FrameLog> log;  ///< index = sequence number
+  std::string first_segmentation_error;  ///< under log_mutex
+  std::map<size_t, TrackedFrame> waiting;  ///< fusion thread: frames held until their labels arrive
+  std::atomic<size_t> frames_fused{0}, segmented{0}, dropped{0}, failed{0}, object_frames{0}, skipped_accumulations{0};
+  std::atomic<size_t> objects_in_map{0};
+  MapperStats final_stats;  ///< the parts only finish() knows
+  bool finished = false;
+  Trajectory final_trajectory;
+  // Stages last: destroyed first (segmentation, then fusion, then objects), each drained.
+  std::unique_ptr<Stage<ObjectWork>> objects_stage;
+  std::unique_ptr<Stage<TrackedFrame>> fusion_stage;
+  std::unique_ptr<Stage<Frame>> segmentation_stage;
+};
+
+void Mapper::Impl::check_frame(const Frame& frame) const {
+  const std::string where = frame.depth_path.empty() ? "frame " + std::to_string(frame.index) : frame.depth_path;
+  if (finished) throw Error(where, "add_frame after finish()");
+  const PinholeIntrinsics& d = camera.depth;
+  if (frame.depth.type() != CV_32FC1 || frame.depth.cols != d.width || frame.depth.rows != d.height)
+    throw Error(where, "depth must be CV_32FC1 metres of " + std::to_string(d.width) + "x" + std::to_string(d.height) +
+                           " (the camera's depth size)");
+  if (!frame.rgb.empty() && frame.rgb.type() != CV_8UC3)
+    throw Error(frame.rgb_path.empty() ? where : frame.rgb_path, "colour must be CV_8UC3 (BGR)");
+}
+
+TrackedFrame Mapper::Impl::locate(const Frame& frame, const std::optional<Pose>& given, FrameResult& result) {
+  if (!external_poses) external_poses = given.has_value();
+  if (*external_poses != given.has_value())
+    throw Error("frame " + std::to_string(frame.index),
+                *external_poses ? "has no pose, but this Mapper was started with poses given by the caller"
+                                : "has a pose, but this Mapper tracks (the first frame came without one)");
+  TrackedFrame item;
+  item.frame = frame;
+  const auto t0 = Clock::now();
+  if (given) {
+    if (!is_valid_pose(*given, 1e-4)) throw Error("frame " + std::to_string(frame.index), "pose is not a rigid transform");
+    item.T_world_camera = *given;
+    if (config.tracking.depth_repair) item.frame.depth = repair_depth(frame.depth, frame.rgb, repair_params(config.tracking));
+    timings.add("depth_repair", ms_since(t0));
+    return item;
+  }
+  std::lock_guard lock(tracker_mutex);
+  if (!tracker) tracker = std::make_unique<Tracker>(config.tracking, camera);
+  const TrackResult r = tracker->track(frame);
+  result.tracking_ms = ms_since(t0);
+  timings.add("tracking", result.tracking_ms);
+  item.T_world_camera = r.T_world_camera;
+  result.status = status_of(r);
+  item.decoded_depth = frame.depth;
+  if (!r.depth.empty()) item.frame.depth = r.depth;
+  return item;
+}
+
+void Mapper::Impl::schedule_segmentation(TrackedFrame& item, bool keyframe, std::optional<SegmentationResult> given) {
+  const SegmentationConfig& sc = config.segmentation;
+  const size_t sequence = item.frame.index;
+  item.map_objects = (keyframe && sc.on_keyframes) || sequence % static_cast<size_t>(sc.every_n_frames) == 0;
+  if (given) {
+    item.segment = true;
+    ++segmented;
+    given->frame_index = sequence;
+    seg_results.put(sequence, std::move(given));
+    return;
+  }
+  item.map_objects = item.map_objects && segmenter;
+  item.segment = item.map_objects || (segmenter && segmenter->is_cheap());
+  if (!item.segment) return;
+  ++segmented;
+  if (sc.when_busy == WhenBusy::wait) return segmentation_stage->push(item.frame);
+  if (auto oldest = segmentation_stage->push_drop_oldest(item.frame)) {
+    ++dropped;
+    --segmented;
+    seg_results.put(oldest->index, std::nullopt);  // fusion then fuses it without labels
+  }
+}
+
+void Mapper::Impl::segment(Frame& frame) {
+  // Never throws: fusion waits for a result (or nullopt) of every frame sent here.
+  const auto t0 = Clock::now();
+  try {
+    SegmentationResult r = segmenter->segment(frame);
+    r.frame_index = frame.index;
+    timings.add("segmentation", ms_since(t0));
+    seg_results.put(frame.index, std::move(r));
+  } catch (const std::exception& e) {
+    spdlog::warn("segmentation of {} failed: {}", frame.rgb_path.empty() ? "frame " + std::to_string(frame.index)
+                                                                          : frame.rgb_path, e.what());
+    if (failed++ == 0) {
+      std::lock_guard lock(log_mutex);
+      first_segmentation_error = e.what();
+    }
+    seg_results.put(frame.index, std::nullopt);
+  }
+}
+
+void Mapper::Impl::on_located(TrackedFrame& item) {
+  if (item.segment) {
+    const size_t sequence = item.frame.index;
+    waiting.emplace(sequence, std::move(item));
+  } else {
+    fuse(item, std::nullopt);
+  }
+  fuse_waiting(false);
+}
+
+void Mapper::Impl::fuse_waiting(bool block) {
+  // In frame order: the object map and the temporal filter see frames as they were taken.
+  while (!waiting.empty()) {
+    auto it = waiting.begin();
+    auto result = seg_results.take(it->first, block);
+    if (!result) return;
+    TrackedFrame item = std::move(it->second);
+    waiting.erase(it);
+    fuse(item, *result);
+    if (*result) hand_to_objects(item, std::move(**result));
+  }
+}
+
+void Mapper::Impl::fuse(TrackedFrame& item, const std::optional<SegmentationResult>& seg) {
+  const auto t0 = Clock::now();
+  IntegrationInput input = make_integration_input(item.frame, camera.depth, item.T_world_camera);
+  input.labels = cv::Mat();
+  if (seg && seg->has_labels()) {
+    input.labels = temporal_filter.apply(seg->labels, item.frame.depth, item.T_world_camera);
+    input.confidence = seg->confidence;
+    input.probabilities = seg->probabilities;
+    if (!*external_poses) label_archive.store(item.frame.index, input.labels);  // only a tracked run refreshes
+  }
+  {
+    std::lock_guard lock(tsdf_mutex);
+    tsdf.integrate(input);
+  }
+  archive_for_refresh(item);
+  ++frames_fused;
+  timings.add("tsdf_integration", ms_since(t0));
+}
+
+void Mapper::Impl::hand_to_objects(TrackedFrame& item, SegmentationResult seg) {
+  ObjectWork work{std::move(item.frame), std::move(seg), item.T_world_camera, item.map_objects};
+  if (work.keyframe) return objects_stage->push(std::move(work));
+  if (!objects.accumulates()) return;
+  // Points between object keyframes are best effort when the policy lets the stages drop work.
+  if (config.segmentation.when_busy == WhenBusy::wait) return objects_stage->push(std::move(work));
+  if (!objects_stage->try_push(work)) ++skipped_accumulations;
+}
+
+void Mapper::Impl::map_objects(ObjectWork& work) {
+  const auto t0 = Clock::now();
+  std::lock_guard lock(objects_mutex);
+  if (!work.keyframe) {
+    objects.accumulate(work.frame, work.segmentation, work.T_world_camera);
+    timings.add("object_accumulate", ms_since(t0));
+    return;
+  }
+  objects.process(work.frame, work.segmentation, work.T_world_camera);
+  timings.add("object_map", ms_since(t0));
+  ++object_frames;
+  objects_in_map = objects.instances().size();
+}
+
+void Mapper::Impl::archive_for_refresh(const TrackedFrame& item) {
+  if (*external_poses) return;  // only a tracked run refreshes
+  const auto t0 = Clock::now();
+  if (reloader) {
+    // The reloader gives the frame as read; what depth repair filled is kept so that the
+    // refresh need not repair again (A1), nor decode colour without a colour layer.
+    repair_archive.store(item.frame.index, item.decoded_depth, item.frame.depth);
+  } else {
+    frame_archive.store(item.frame.index, item.frame.depth, config.tsdf.colour_layer ? item.frame.rgb : cv::Mat());
+  }
+  timings.add("refresh_archive", ms_since(t0));
+}
+
+Trajectory Mapper::Impl::current_trajectory() const {
+  if (finished) return final_trajectory;
   if (tracker) {
+    std::lock_guard lock(tracker_mutex);
+    return tracker->trajectory();
+  }
+  std::lock_guard lock(log_mutex);
+  Trajectory out;
+  for (const FrameLog& f : log) out.push_back({f.timestamp, f.T_world_camera_online});
+  return out;
+}
+
+std::optional<IntegrationInput> Mapper::Impl::refresh_input(size_t sequence, const Pose& T_world_camera) const {
+  FrameLog entry;
+  {
+    std::lock_guard lock(log_mutex);
+    entry = log[sequence];
+  }
+  if (!entry.fused) return std::nullopt;
+  Frame frame;
+  try {
+    if (frame_archive.has(sequence)) {
+      std::tie(frame.depth, frame.rgb) = frame_archive.load(sequence);
+    } else if (reloader) {
+      frame = reloader(entry.frame_index, config.tsdf.colour_layer || !repair_archive.has(sequence));
+      if (repair_archive.has(sequence)) {
+        repair_archive.apply(sequence, frame.depth);
+      } else if (config.tracking.depth_repair) {
+        frame.depth = repair_depth(frame.depth, frame.rgb, repair_params(config.tracking));
+      }
+    } else {
+      return std::nullopt;
+    }
+  } catch (const Error& e) {
+    spdlog::warn("map refresh: frame {} left out: {}", entry.frame_index, e.what());
+    return std::nullopt;
+  }
+  frame.index = sequence;
+  IntegrationInput input = make_integration_input(frame, camera.depth, T_world_camera);
+  input.labels = label_archive.find(sequence);
+  return input;
+}
+
+void Mapper::Impl::refresh_map(const Trajectory& optimised) {
+  // Per frame, the correction T_optimised * T_online^-1 of the final pass and how far it moves a
+  // surface point at the far end of the depth range.
+  std::vector<FrameLog> frames;
+  {
+    std::lock_guard lock(log_mutex);
+    frames = log;
+  }
+  if (optimised.size() != frames.size()) throw Error("Mapper", "tracker returned a trajectory of another length");
+  std::unordered_map<uint32_t, Eigen::Isometry3f> corrections;
+  double max_displacement = 0.0;
+  for (size_t k = 0; k < frames.size(); ++k) {
+    const Pose& online = frames[k].T_world_camera_online;
+    corrections[static_cast<uint32_t>(k)] = (optimised[k].T_world_camera * online.inverse()).cast<float>();
+    max_displacement = std::max(max_displacement, surface_displacement_m(online, optimised[k].T_world_camera,
+                                                                         config.tsdf.max_range));
+  }
+  final_stats.max_pose_correction_m = max_displacement;
+  if (final_stats.loop_edges == 0) return;
+  {
+    std::lock_guard lock(objects_mutex);
+    objects.apply_pose_corrections(corrections);  // object points move with their frame
+  }
+  if (max_displacement <= 0.25 * config.tsdf.voxel_size) return;  // under a quarter voxel: keep the map
+  const auto t0 = Clock::now();
+  size_t missing = 0;
+  for (size_t k = 0; k < frames.size(); ++k)
+    if (frames[k].fused && !frame_archive.has(k) && !reloader) ++missing;
+  if (missing > 0) {
+    final_stats.map_refresh_note = std::to_string(missing) +
+                                   " frames were past pipeline.refresh_cache_mb and no frame reloader was set: "
+                                   "the map keeps its online poses";
+    spdlog::warn("map refresh skipped: {}", final_stats.map_refresh_note);
+    return;
+  }
+  SemanticTsdf rebuilt = rebuild_tsdf(config.tsdf, frames.size(), config.pipeline.threads,
+                                      [&](size_t k) { return refresh_input(k, optimised[k].T_world_camera); });
+  {
+    std::lock_guard lock(tsdf_mutex);
+    tsdf = std::move(rebuilt);
+  }
+  final_stats.map_refreshed = true;
+  timings.add("map_refresh", ms_since(t0));
+}
+
+Mapper::Mapper(const SemapConfig& config, const CameraModel& camera, std::unique_ptr<Segmenter> segmenter) {
+  config.validate();
+  impl_ = std::make_unique<Impl>(config, camera, std::move(segmenter));
+}
+
+Mapper::~Mapper() = default;
+
+FrameResult Mapper::add_frame(const Frame& frame, FrameHints hints) {
+  Impl& m = *impl_;
+  const auto t0 = Clock::now();
+  m.check_frame(frame);
+  FrameResult result;
+  result.frame_index = frame.index;
+  result.timestamp = frame.timestamp;
+  size_t sequence = 0;
+  {
+    std::lock_guard lock(m.log_mutex);
+    sequence = m.log.size();
+  }
+  Frame own = frame;
+  own.index = sequence;
+  TrackedFrame item = m.locate(own, hints.T_world_camera, result);
+  result.T_world_camera = item.T_world_camera;
+  result.fused = result.status != FrameStatus::lost;  // a pose that failed its checks is never fused
+  {
+    std::lock_guard lock(m.log_mutex);
+    m.log.push_back({frame.index, frame.timestamp, item.T_world_camera, result.fused});
+  }
+  if (result.fused) {
+    m.schedule_segmentation(item, result.status == FrameStatus::keyframe, std::move(hints.segmentation));
+    result.segmented = item.segment;
+    m.fusion_stage->push(std::move(item));
+  }
+  result.total_ms = ms_since(t0);
+  return result;
+}
+
+void Mapper::finish() {
+  Impl& m = *impl_;
+  if (m.finished) return;
+  m.segmentation_stage->close();
+  m.fusion_stage->close();
+  m.objects_stage->close();
+  if (m.tracker) {
     const auto t0 = Clock::now();
-    trajectory = tracker->finish();
-    tracker_stats = tracker->stats();
-    timings.add("pose_graph_final", ms_since(t0));
-    // The map uses the optimised poses: when loop closure moved the frames by more than a
-    // quarter voxel (at the far end of the depth range), the TSDF is rebuilt from every frame
-    // with its optimised pose and the labels archived for segmented frames.
-    auto pose_at = [&](double timestamp) -> std::optional<Pose> {
-      const auto it = std::lower_bound(trajectory.begin(), trajectory.end(), timestamp - 1e-9,
-                                       [](const StampedPose& p, double t) { return p.timestamp < t; });
-      if (it == trajectory.end() || std::abs(it->timestamp - timestamp) > 1e-6) return std::nullopt;
-      return it->T_world_camera;
-    };
-    // Per online frame, the correction T_optimised * T_online^-1 of the final pass, and how far
-    // it moves a surface point at the far end of the depth range (camera shift + angle * range).
-    std::unordered_map<uint32_t, Eigen::Isometry3f> corrections;
-    for (size_t k = 0; k < online_trajectory.size(); ++k) {
-      const auto optimised = pose_at(online_trajectory[k].timestamp);
-      if (!optimised) continue;
-      const Pose& online = online_trajectory[k].T_world_camera;
-      const Pose correction = *optimised * online.inverse();
-      corrections[static_cast<uint32_t>(online_frame_indices[k])] = correction.cast<float>();
-      max_pose_correction = std::max(max_pose_correction, (optimised->translation() - online.translation()).norm() +
-                                                              Eigen::AngleAxisd(correction.linear()).angle() *
-                                                                  config.tsdf.max_range);
+    Trajectory optimised;
+    {
+      std::lock_guard lock(m.tracker_mutex);
+      optimised = m.tracker->finish();
+      m.final_stats.loop_edges = m.tracker->stats().loop_edges;
     }
-    // Object points move with the frame they were observed in.
-    if (tracker_stats.loop_edges > 0) objects.apply_pose_corrections(corrections);
-    if (tracker_stats.loop_edges > 0 && max_pose_correction > 0.25 * config.tsdf.voxel_size) {
-      const auto t1 = Clock::now();
-      SemanticTsdf refreshed(config.tsdf);
-      // Reading, repair and label decoding run in parallel; integration stays serial in frame
-      // order, so one thread still gives byte-identical maps (issue 8).
-      size_t next = 0;
-      tbb::parallel_pipeline(
-          static_cast<size_t>(2 * threads),
-          tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
-                                         [&](tbb::flow_control& fc) -> size_t {
-                                           if (next >= frame_count) fc.stop();
-                                           return next++;
-                                         }) &
-              tbb::make_filter<size_t, std::optional<IntegrationInput>>(
-                  tbb::filter_mode::parallel,
-                  [&](size_t i) -> std::optional<IntegrationInput> {
-                    const auto pose = pose_at(dataset->records()[i].timestamp);
-                    if (!pose) return std::nullopt;  // skipped in the online pass
-                    Frame frame;
-                    try {
-                      if (repair_archive.has(i)) {  // depth image + the archived repair fills
-                        frame.index = i;
-                        frame.depth = dataset->load_depth(i);
-                        repair_archive.apply(i, frame.depth);
-                      } else {
-                        frame = dataset->load(i);
-                        if (config.tracking.depth_repair) frame.depth = repair_depth(frame.depth, frame.rgb, repair);
-                      }
-                    } catch (const Error&) {
-                      return std::nullopt;  // warned and counted in the online pass
-                    }
-                    IntegrationInput input = make_integration_input(frame, camera.depth, *pose);  // shares the images
-                    input.labels = label_archive.find(frame.index);
-                    return input;
-                  }) &
-              tbb::make_filter<std::optional<IntegrationInput>, void>(
-                  tbb::filter_mode::serial_in_order,
-                  [&](const std::optional<IntegrationInput>& input) {
-                    if (input) refreshed.integrate(*input);
-                  }));
-      tsdf = std::move(refreshed);
-      map_refreshed = true;
-      timings.add("map_refresh", ms_since(t1));
-    }
+    m.timings.add("pose_graph_final", ms_since(t0));
+    m.refresh_map(optimised);
+    m.final_trajectory = std::move(optimised);
+  } else {
+    m.final_trajectory = m.current_trajectory();
   }
   {
     const auto t0 = Clock::now();
-    objects.finish();
-    timings.add("object_map_final", ms_since(t0));
+    std::lock_guard lock(m.objects_mutex);
+    m.objects.finish();
+    m.objects_in_map = m.objects.instances().size();
+    m.timings.add("object_map_final", ms_since(t0));
   }
+  m.finished = true;
+}
 
-  // --- outputs ----------------------------------------------------------------------
-  const auto t_out = Clock::now();
-  write_tum_trajectory(options.out_dir / "trajectory.txt", trajectory);
-  TriangleMesh mesh = tsdf.extract_mesh();
-  timings.add("mesh_extraction", ms_since(t_out));
+void Mapper::set_frame_reloader(FrameReloader reloader) {
+  {
+    std::lock_guard lock(impl_->log_mutex);
+    if (!impl_->log.empty()) throw Error("Mapper", "set_frame_reloader must be called before the first frame");
+  }
+  impl_->reloader = std::move(reloader);
+}
+
+Trajectory Mapper::trajectory() const { return impl_->current_trajectory(); }
+
+TriangleMesh Mapper::mesh() const {
+  TriangleMesh mesh;
+  {
+    std::lock_guard lock(impl_->tsdf_mutex);
+    mesh = impl_->tsdf.extract_mesh();
+  }
+  std::lock_guard lock(impl_->objects_mutex);
   mesh.vertices.instances =
-      objects.instance_ids_for(mesh.vertices.points, static_cast<float>(1.5 * config.tsdf.voxel_size));
-  write_ply(options.out_dir / "mesh.ply", mesh);
-  tsdf.save(options.out_dir / "map.semap");
-  objects.write(options.out_dir);
-  const nlohmann::json objects_json = objects.to_json();
+      impl_->objects.instance_ids_for(mesh.vertices.points, static_cast<float>(1.5 * impl_->config.tsdf.voxel_size));
+  return mesh;
+}
 
-  // --- evaluation against ground truth -----------------------------------------------
-  // The map lives in the tracker's world (first camera); for evaluation it is moved into the
-  // ground-truth world by the ATE alignment (Horn/Umeyama), as the TUM benchmark aligns.
-  nlohmann::json evaluation = nlohmann::json::object();
-  if (options.evaluate) {
-    Pose T_gt_map = Pose::Identity();
-    if (!use_gt_poses && dataset->has_ground_truth()) {
-      try {
-        const Trajectory gt = dataset->ground_truth();
-        const AteResult ate = compute_ate(gt, trajectory);
-        T_gt_map = ate.T_gt_est;
-        evaluation["ate"] = to_json(ate);
-        evaluation["rpe"] = to_json(compute_rpe(gt, trajectory));
-      } catch (const Error& e) {
-        spdlog::warn("trajectory evaluation skipped: {}", e.what());
-      }
-    }
-    const Eigen::Affine3f T = T_gt_map.cast<float>();
-    const auto gt_points = dataset->root() / "gt_points.ply";
-    if (std::filesystem::exists(gt_points)) {
-      const TriangleMesh gt = read_ply(gt_points);
-      if (!mesh.vertices.empty()) {
-        PointCloud aligned = mesh.vertices;
-        for (auto& p : aligned.points) p = T * p;
-        evaluation["semantic"] = to_json(evaluate_semantic(gt.vertices, aligned));
-      }
-      std::vector<EvalObject> map_objects;
-      for (const auto& inst : objects.instances()) {
-        EvalObject o{inst.id, inst.class_id(), inst.points};
-        for (auto& p : o.points) p = T * p;
-        map_objects.push_back(std::move(o));
-      }
-      evaluation["objects"] = to_json(evaluate_objects(gt_objects_from_points(gt.vertices), map_objects));
-    }
+std::vector<ObjectSummary> Mapper::objects() const {
+  std::lock_guard lock(impl_->objects_mutex);
+  return impl_->objects.summaries();
+}
+
+void Mapper::read_tsdf(const std::function<void(const TsdfMap&)>& reader) const {
+  std::lock_guard lock(impl_->tsdf_mutex);
+  reader(impl_->tsdf.map());
+}
+
+MapperStats Mapper::stats() const {
+  const Impl& m = *impl_;
+  MapperStats s = m.final_stats;
+  {
+    std::lock_guard lock(m.log_mutex);
+    s.frames = m.log.size();
+    s.segmentation_error = m.first_segmentation_error;
   }
-
-  // --- report -------------------------------------------------------------------------
-  const double wall_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
-  nlohmann::json report;
-  report["dataset"] = options.dataset.string();
-  report["summary"] = {
-      {"frames", frames_done.load()},
-      {"frames_skipped", skipped_frames.load()},
-      {"keyframes", tracker ? tracker_stats.keyframes : keyframes.load()},
-      {"segmented_frames", segmented_frames.load()},
-      {"segmentations_dropped", dropped_segmentations.load()},
-      {"object_frames", objects_processed.load()},
-      {"object_accumulations_skipped", skipped_accumulations.load()},
-      {"objects", objects.instances().size()},
-      {"poses", options.poses},
-      {"segmenter", segmenter ? segmenter->name() : std::string("none")},
-      {"loop_edges", tracker_stats.loop_edges},
-      {"map_refreshed_with_optimised_poses", map_refreshed},
-      {"max_pose_correction_m", max_pose_correction},
-      {"refresh_archive_mb", (label_archive.bytes() + repair_archive.bytes()) / (1024.0 * 1024.0)},
-      {"mesh_vertices", mesh.vertices.size()},
-      {"mesh_triangles", mesh.triangles.size()},
-      // online: the stages streaming the frames; end to end: also the final pose-graph pass,
-      // map refresh, meshing, evaluation and outputs.
-      {"fps_online", frames_done.load() / std::max(online_s, 1e-9)},
-      {"fps_end_to_end", frames_done.load() / std::max(wall_s, 1e-9)},
-      {"wall_s", wall_s},
-      {"peak_rss_mb", peak_rss_bytes() / (1024.0 * 1024.0)},
-      {"threads", threads},
-  };
-  report["objects_per_class"] = objects_per_class(objects);
-  report["evaluation"] = evaluation;
-  report["timings"] = timings_json(timings);
-  if (tracker) {
-    report["tracking"] = {{"keyframes", tracker_stats.keyframes}, {"lost_frames", tracker_stats.lost_frames},
-                          {"relocalisations", tracker_stats.relocalisations}, {"loop_edges", tracker_stats.loop_edges},
-                          {"optimisations", tracker_stats.optimisations}};
+  if (m.tracker) {
+    std::lock_guard lock(m.tracker_mutex);
+    const TrackerStats t = m.tracker->stats();
+    s.keyframes = t.keyframes;
+    s.lost_frames = t.lost_frames;
+    s.relocalisations = t.relocalisations;
+    s.loop_edges = t.loop_edges;
+    s.optimisations = t.optimisations;
   }
+  s.frames_fused = m.frames_fused;
+  s.segmented_frames = m.segmented;
+  s.segmentations_dropped = m.dropped;
+  s.segmentations_failed = m.failed;
+  s.object_frames = m.object_frames;
+  s.object_accumulations_skipped = m.skipped_accumulations;
+  s.objects = m.objects_in_map;  // not the objects lock: the object stage may hold it for long
+  s.finished = m.finished;
+  s.refresh_archive_bytes = m.label_archive.bytes() + m.repair_archive.bytes() + m.frame_archive.bytes();
+  s.external_poses = m.external_poses.value_or(false);
+  s.segmenter = m.segmenter ? m.segmenter->name() : "none";
+  return s;
+}
 
-  const cv::Mat topdown = render_topdown(mesh, trajectory, report_objects(objects_json));
-  write_atomic_with(options.out_dir / "topdown.png", [&](const std::filesystem::path& tmp) {
-    if (!cv::imwrite(tmp.string() + ".png", topdown)) throw Error(options.out_dir / "topdown.png", "cannot write");
-    std::filesystem::rename(tmp.string() + ".png", tmp);
-  });
-  write_file_atomic(options.out_dir / "report.json", report.dump(2) + "\n");
-  write_report_html(options.out_dir, report);
-  if (options.show_progress) progress.finish(progress_extra());
-  return report;
+std::map<std::string, TimingSummary> Mapper::timings() const {
+  std::map<std::string, TimingSummary> out;
+  for (const std::string& stage : impl_->timings.stages()) out[stage] = impl_->timings.summary(stage);
+  return out;
+}
+
+void Mapper::add_timing(const std::string& stage, double ms) { impl_->timings.add(stage, ms); }
+
+const SemapConfig& Mapper::config() const { return impl_->config; }
+const CameraModel& Mapper::camera() const { return impl_->camera; }
+
+void Mapper::save(const std::filesystem::path& path) const {
+  std::lock_guard lock(impl_->tsdf_mutex);
+  impl_->tsdf.save(path);
 }
 
 }  // namespace semap

@@ -1,6 +1,9 @@
 #include "pipeline/refresh_archive.hpp"
 
+#include <libdeflate.h>
+
 #include <cmath>
+#include <memory>
 #include <opencv2/imgcodecs.hpp>
 
 #include "core/error.hpp"
@@ -72,6 +75,72 @@ void RepairArchive::apply(size_t frame_index, cv::Mat& depth) const {
 }
 
 size_t RepairArchive::bytes() const {
+  std::lock_guard lock(mutex_);
+  return bytes_;
+}
+
+FrameArchive::Packed FrameArchive::pack(const cv::Mat& image) {
+  Packed p;
+  if (image.empty()) return p;
+  const cv::Mat continuous = image.isContinuous() ? image : image.clone();
+  p.rows = image.rows;
+  p.cols = image.cols;
+  p.type = image.type();
+  p.raw_bytes = continuous.total() * continuous.elemSize();
+  // Level 1: the archive is written on the fusion thread of every frame; speed over ratio.
+  std::unique_ptr<libdeflate_compressor, decltype(&libdeflate_free_compressor)> c(libdeflate_alloc_compressor(1),
+                                                                                 libdeflate_free_compressor);
+  if (!c) throw Error("FrameArchive", "out of memory");
+  p.deflated.resize(libdeflate_deflate_compress_bound(c.get(), p.raw_bytes));
+  const size_t n = libdeflate_deflate_compress(c.get(), continuous.data, p.raw_bytes, p.deflated.data(), p.deflated.size());
+  p.deflated.resize(n);
+  p.deflated.shrink_to_fit();
+  return p;
+}
+
+cv::Mat FrameArchive::unpack(const Packed& p) {
+  if (p.raw_bytes == 0) return {};
+  cv::Mat image(p.rows, p.cols, p.type);
+  std::unique_ptr<libdeflate_decompressor, decltype(&libdeflate_free_decompressor)> d(libdeflate_alloc_decompressor(),
+                                                                                     libdeflate_free_decompressor);
+  if (!d || libdeflate_deflate_decompress(d.get(), p.deflated.data(), p.deflated.size(), image.data, p.raw_bytes,
+                                          nullptr) != LIBDEFLATE_SUCCESS)
+    throw Error("FrameArchive", "cannot restore an archived frame");
+  return image;
+}
+
+bool FrameArchive::store(size_t key, const cv::Mat& depth, const cv::Mat& colour) {
+  if (budget_ == 0) return false;
+  {
+    std::lock_guard lock(mutex_);
+    if (bytes_ >= budget_) return false;
+  }
+  auto packed = std::make_pair(pack(depth), pack(colour));
+  const size_t size = packed.first.deflated.size() + packed.second.deflated.size() + 2 * sizeof(Packed);
+  std::lock_guard lock(mutex_);
+  if (bytes_ + size > budget_) return false;
+  bytes_ += size;
+  archive_[key] = std::move(packed);
+  return true;
+}
+
+bool FrameArchive::has(size_t key) const {
+  std::lock_guard lock(mutex_);
+  return archive_.count(key) > 0;
+}
+
+std::pair<cv::Mat, cv::Mat> FrameArchive::load(size_t key) const {
+  const std::pair<Packed, Packed>* packed = nullptr;
+  {
+    std::lock_guard lock(mutex_);
+    const auto it = archive_.find(key);
+    if (it == archive_.end()) throw Error("FrameArchive", "frame " + std::to_string(key) + " was not archived");
+    packed = &it->second;  // entries are never erased: the pointer stays valid
+  }
+  return {unpack(packed->first), unpack(packed->second)};
+}
+
+size_t FrameArchive::bytes() const {
   std::lock_guard lock(mutex_);
   return bytes_;
 }

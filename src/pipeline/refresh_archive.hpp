@@ -51,4 +51,32 @@ class RepairArchive {
   std::map<size_t, Fills> archive_;
 };
 
+/// Whole frames (the depth fused, after repair, and the colour image) compressed losslessly in
+/// memory up to a byte budget: what the refresh uses when the caller gave the Mapper no way to
+/// reload its frames (a live camera, a Python loop). A frame past the budget is not archived.
+class FrameArchive {
+ public:
+  explicit FrameArchive(size_t budget_bytes) : budget_(budget_bytes) {}
+  /// False when the frame did not fit into the budget (nothing stored).
+  bool store(size_t key, const cv::Mat& depth, const cv::Mat& colour);
+  bool has(size_t key) const;
+  /// The depth (CV_32FC1) and colour (CV_8UC3, or empty) stored under key; throws when absent.
+  std::pair<cv::Mat, cv::Mat> load(size_t key) const;
+  size_t bytes() const;
+
+ private:
+  struct Packed {
+    int rows = 0, cols = 0, type = 0;
+    size_t raw_bytes = 0;
+    std::vector<uint8_t> deflated;
+  };
+  static Packed pack(const cv::Mat& image);
+  static cv::Mat unpack(const Packed& packed);
+
+  size_t budget_;
+  mutable std::mutex mutex_;
+  size_t bytes_ = 0;
+  std::map<size_t, std::pair<Packed, Packed>> archive_;
+};
+
 }  // namespace semap

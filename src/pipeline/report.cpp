@@ -134,13 +134,11 @@ cv::Mat render_topdown(const TriangleMesh& mesh, const Trajectory& trajectory,
   return image;
 }
 
-nlohmann::json timings_json(const StageTimings& timings) {
+nlohmann::json timings_json(const std::map<std::string, TimingSummary>& timings) {
   nlohmann::json j = nlohmann::json::object();
-  for (const auto& stage : timings.stages()) {
-    const TimingSummary s = timings.summary(stage);
+  for (const auto& [stage, s] : timings)
     j[stage] = {{"count", s.count}, {"mean_ms", s.mean_ms}, {"median_ms", s.median_ms}, {"p95_ms", s.p95_ms},
                 {"total_ms", s.total_ms}};
-  }
   return j;
 }
 

@@ -2,6 +2,7 @@
 // report.json / report.html / topdown.png: what a person reads after a run (issue 7).
 #include <Eigen/Core>
 #include <filesystem>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
 #include <string>
@@ -26,7 +27,7 @@ cv::Mat render_topdown(const TriangleMesh& mesh, const Trajectory& trajectory,
                        const std::vector<ReportObject>& objects, int max_side_px = 900);
 
 /// Per-stage timing table as JSON {stage: {count, mean_ms, median_ms, p95_ms}}.
-nlohmann::json timings_json(const StageTimings& timings);
+nlohmann::json timings_json(const std::map<std::string, TimingSummary>& timings);
 
 /// Writes report.html beside report.json (reads its figures from `report`), referencing
 /// topdown.png in the same folder. Atomic.

@@ -22,6 +22,7 @@ class SimulatedSegmenter : public Segmenter {
     return ground_truth_->segment(noisy);
   }
   std::string name() const override { return "simulated(" + ground_truth_->name() + ")"; }
+  bool is_cheap() const override { return true; }
 
  private:
   std::unique_ptr<Segmenter> ground_truth_;

@@ -22,6 +22,7 @@ class GroundTruthSegmenter : public Segmenter {
   /// Throws semap::Error(frame.rgb_path, ...) when the frame carries no labels.
   SegmentationResult segment(const Frame& frame) override;
   std::string name() const override { return "groundtruth"; }
+  bool is_cheap() const override { return true; }
 };
 
 class PrecomputedSegmenter : public Segmenter {
@@ -33,6 +34,7 @@ class PrecomputedSegmenter : public Segmenter {
   /// Reads DIR/NAME.* directly.
   SegmentationResult read(const std::string& name) const;
   std::string name() const override { return "precomputed:" + dir_.string(); }
+  bool is_cheap() const override { return true; }
 
  private:
   std::filesystem::path dir_;

@@ -38,6 +38,9 @@ class Segmenter {
   virtual ~Segmenter() = default;
   virtual SegmentationResult segment(const Frame& frame) = 0;
   virtual std::string name() const = 0;
+  /// True when segmenting costs next to nothing (labels read from files, ground truth): the
+  /// Mapper then labels every frame for the TSDF, not only the scheduled ones.
+  virtual bool is_cheap() const { return false; }
 };
 
 }  // namespace semap

@@ -19,9 +19,9 @@ SemanticSegmenter::SemanticSegmenter(const std::filesystem::path& model_path, co
   if (info.outputs.size() != 1)
     throw Error(model_path, "not a semantic segmentation model: expected 1 output (logits), found " +
                                 std::to_string(info.outputs.size()));
-  const std::string& layout = config_.semantic.input_layout;
+  const InputLayout layout = config_.semantic.input_layout;
   // auto: a channel axis of 3 at position 3 (and not at 1) means NHWC.
-  nhwc_input_ = layout == "nhwc" || (layout == "auto" && s[3] == 3 && s[1] != 3);
+  nhwc_input_ = layout == InputLayout::nhwc || (layout == InputLayout::automatic && s[3] == 3 && s[1] != 3);
   const int64_t h = nhwc_input_ ? s[1] : s[2], w = nhwc_input_ ? s[2] : s[3];
   input_size_ = {config_.semantic.input_width > 0 ? config_.semantic.input_width : (w > 0 ? int(w) : 513),
                  config_.semantic.input_height > 0 ? config_.semantic.input_height : (h > 0 ? int(h) : 513)};

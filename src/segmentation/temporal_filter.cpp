@@ -61,8 +61,8 @@ cv::Mat TemporalLabelFilter::keep_mask_warped(const cv::Mat& labels, const cv::M
 
 cv::Mat TemporalLabelFilter::apply(const cv::Mat& labels, const cv::Mat& depth, const Pose& T_world_camera) {
   if (labels.type() != CV_8UC1) throw Error("temporal label filter", "labels must be CV_8UC1");
-  if (config_.method == "none") return labels.clone();
-  const bool warped = config_.method == "warped";
+  if (config_.method == TemporalMethod::none) return labels.clone();
+  const bool warped = config_.method == TemporalMethod::warped;
   if (warped && (depth.type() != CV_32FC1 || depth.size() != labels.size()))
     throw Error("temporal label filter", "warped filter needs CV_32FC1 depth of the label image's size");
   if (!history_.empty() && history_.front().labels.size() != labels.size()) history_.clear();

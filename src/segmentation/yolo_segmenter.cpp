@@ -142,7 +142,7 @@ YoloSegmenter::Candidates YoloSegmenter::candidates_from_outputs(const cv::Mat& 
 SegmentationResult YoloSegmenter::decode(const Candidates& c) {
   const YoloConfig& yc = config_.yolo;
   const std::vector<NmsResult> kept =
-      yc.nms == "hard" ? hard_nms(c.boxes, yc.nms_iou, yc.class_agnostic_nms, yc.max_detections)
+      yc.nms == NmsMethod::hard ? hard_nms(c.boxes, yc.nms_iou, yc.class_agnostic_nms, yc.max_detections)
                        : soft_nms(c.boxes, yc.soft_nms_sigma, yc.score_floor, yc.class_agnostic_nms, yc.max_detections);
   SegmentationResult result;
   if (kept.empty()) {

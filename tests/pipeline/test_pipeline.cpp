@@ -10,7 +10,7 @@
 
 #include "core/error.hpp"
 #include "core/progress.hpp"
-#include "pipeline/mapper.hpp"
+#include "pipeline/run_pipeline.hpp"
 #include "synth/synth_config.hpp"
 #include "test_support.hpp"
 
@@ -49,7 +49,7 @@ class PipelineTest : public ::testing::Test {
     RunOptions o;
     o.dataset = data();
     o.out_dir = out(name);
-    o.poses = "groundtruth";
+    o.poses = PoseSource::groundtruth;
     o.segmenter = "groundtruth";
     o.show_progress = false;
     return o;
@@ -62,18 +62,18 @@ test::TempDir* PipelineTest::dir_ = nullptr;
 TEST_F(PipelineTest, GroundTruthRunWritesEveryOutputAndMeetsSemanticFigures) {
   SemapConfig config;
   config.tsdf.voxel_size = 0.02;
-  const nlohmann::json report = run_pipeline(gt_options("gt"), config);
+  const RunResult result = run_pipeline(gt_options("gt"), config);
   for (const char* f : {"trajectory.txt", "mesh.ply", "objects.json", "map.semap", "report.json", "report.html", "topdown.png"})
     EXPECT_TRUE(std::filesystem::exists(out("gt") / f)) << f;
   // No temp files left behind.
   for (const auto& e : std::filesystem::directory_iterator(out("gt")))
     EXPECT_NE(e.path().extension(), ".tmp") << e.path();
-  const auto& sem = report["evaluation"]["semantic"];
-  ASSERT_FALSE(sem.is_null());
-  EXPECT_GE(sem["miou"].get<double>(), 0.90);
-  EXPECT_LE(sem["surface_error_mean_m"].get<double>(), 0.01);
-  EXPECT_GE(sem["completeness"].get<double>(), 0.90);
-  EXPECT_GT(report["summary"]["objects"].get<int>(), 0);
+  ASSERT_TRUE(result.evaluation.semantic);
+  const SemanticEvaluation& sem = *result.evaluation.semantic;
+  EXPECT_GE(sem.miou, 0.90);
+  EXPECT_LE(sem.surface_error_mean_m, 0.01);
+  EXPECT_GE(sem.completeness, 0.90);
+  EXPECT_GT(result.mapper.objects, 0u);
 }
 
 TEST_F(PipelineTest, OneThreadRunsAreByteIdentical) {
@@ -101,26 +101,26 @@ TEST_F(PipelineTest, TemporalLabelFilterSitsBeforeFusion) {
   struct Figures {
     double labelled = 0, wrong = 1, vertices = 0;
   };
-  auto run = [&](const std::string& method) {
+  auto run = [&](TemporalMethod method) {
     SemapConfig config;
     config.tsdf.voxel_size = 0.03;
     config.segmentation.temporal.method = method;
-    RunOptions o = gt_options("temporal_" + method);
+    RunOptions o = gt_options("temporal_" + std::string(enum_name(kTemporalMethodNames, method)));
     o.seg_noise = 0.2;
     o.max_frames = 60;
-    const nlohmann::json report = run_pipeline(o, config);
-    const auto& sem = report["evaluation"]["semantic"];
+    const RunResult result = run_pipeline(o, config);
+    const SemanticEvaluation& sem = result.evaluation.semantic.value();
     Figures f;
     double correct = 0;
-    for (const auto& c : sem["classes"]) {
-      f.labelled += c["map_vertices"].get<double>();
-      correct += c["precision"].get<double>() * c["map_vertices"].get<double>();
+    for (const ClassIoU& c : sem.classes) {
+      f.labelled += static_cast<double>(c.map_vertices);
+      correct += c.precision * static_cast<double>(c.map_vertices);
     }
     if (f.labelled > 0) f.wrong = 1.0 - correct / f.labelled;
-    f.vertices = sem["map_vertices"].get<double>();
+    f.vertices = static_cast<double>(sem.map_vertices);
     return f;
   };
-  const Figures none = run("none"), warped = run("warped");
+  const Figures none = run(TemporalMethod::none), warped = run(TemporalMethod::warped);
   std::printf("20%% flicker: labelled vertices %.0f -> %.0f of %.0f, wrong share %.4f -> %.4f (none -> warped)\n",
               none.labelled, warped.labelled, none.vertices, none.wrong, warped.wrong);
   EXPECT_EQ(warped.vertices, none.vertices) << "the filter touches labels only, never geometry";
@@ -172,11 +172,11 @@ TEST(PipelineRefresh, RepairArchiveGivesTheSameMapAsRepairingAgain) {
     o.show_progress = false;
     return run_pipeline(o, config);
   };
-  const nlohmann::json reread = run(0), archived = run(256);
-  ASSERT_TRUE(archived["summary"]["map_refreshed_with_optimised_poses"].get<bool>()) << "no refresh: nothing compared";
-  EXPECT_EQ(reread["summary"]["refresh_archive_mb"].get<double>(), 0.0);
-  EXPECT_GT(archived["summary"]["refresh_archive_mb"].get<double>(), 0.0);
-  EXPECT_LT(archived["summary"]["refresh_archive_mb"].get<double>(), 20.0) << "fills only, not whole frames";
+  const RunResult reread = run(0), archived = run(256);
+  ASSERT_TRUE(archived.mapper.map_refreshed) << "no refresh: nothing compared";
+  EXPECT_EQ(reread.mapper.refresh_archive_bytes, 0u);
+  EXPECT_GT(archived.mapper.refresh_archive_bytes, 0u);
+  EXPECT_LT(archived.mapper.refresh_archive_bytes, 20u << 20) << "fills only, not whole frames";
   for (const char* f : {"map.semap", "mesh.ply", "trajectory.txt"})
     EXPECT_EQ(slurp(dir / "cache_0" / f), slurp(dir / "cache_256" / f)) << f;
 }

@@ -10,7 +10,7 @@
 #include "core/labels.hpp"
 #include "core/progress.hpp"
 #include "io/ply_io.hpp"
-#include "pipeline/mapper.hpp"
+#include "pipeline/run_pipeline.hpp"
 #include "test_support.hpp"
 
 namespace semap {
@@ -22,14 +22,14 @@ size_t vertices_labelled(const TriangleMesh& mesh, Label label) {
   return n;
 }
 
-nlohmann::json run_with(const std::filesystem::path& dataset, const std::filesystem::path& out, const std::string& segmenter) {
+RunResult run_with(const std::filesystem::path& dataset, const std::filesystem::path& out, const std::string& segmenter) {
   Progress::set_mode(-1);
   SemapConfig config;
   config.tsdf.voxel_size = 0.03;
   RunOptions o;
   o.dataset = dataset;
   o.out_dir = out;
-  o.poses = "groundtruth";
+  o.poses = PoseSource::groundtruth;
   o.segmenter = segmenter;
   o.max_frames = 40;
   o.show_progress = false;
@@ -42,16 +42,20 @@ TEST(PipelineModels, YoloSegmenterLabelsTableAndChairsAndMapsThem) {
   const auto model = test::models_dir() / "yolov8n-seg-320.onnx";
   if (!std::filesystem::exists(model)) GTEST_SKIP() << "model missing: " << model;
   test::TempDir out("semap_pipeline_yolo");
-  const nlohmann::json report = run_with(kitchen, out.path(), "yolo:" + model.string());
-  EXPECT_GE(report["summary"]["segmented_frames"].get<int>(), 8);
+  const RunResult result = run_with(kitchen, out.path(), "yolo:" + model.string());
+  EXPECT_GE(result.mapper.segmented_frames, 8u);
   const TriangleMesh mesh = read_ply(out / "mesh.ply");
   std::printf("yolo: %zu table, %zu chair vertices of %zu; objects %s\n", vertices_labelled(mesh, Label::kTable),
-              vertices_labelled(mesh, Label::kChair), mesh.vertices.size(), report["objects_per_class"].dump().c_str());
+              vertices_labelled(mesh, Label::kChair), mesh.vertices.size(),
+              nlohmann::json(result.objects_per_class).dump().c_str());
   EXPECT_GT(vertices_labelled(mesh, Label::kTable), 200u);
   EXPECT_GT(vertices_labelled(mesh, Label::kChair), 100u);
-  const auto& per_class = report["objects_per_class"];
-  EXPECT_GE(per_class.value("table", 0), 1) << per_class.dump();
-  EXPECT_GE(per_class.value("chair", 0), 1) << per_class.dump();
+  const auto count = [&](const char* name) {
+    const auto it = result.objects_per_class.find(name);
+    return it == result.objects_per_class.end() ? 0 : it->second;
+  };
+  EXPECT_GE(count("table"), 1);
+  EXPECT_GE(count("chair"), 1);
 }
 
 TEST(PipelineModels, SemanticSegmenterLabelsTableAndChairs) {
@@ -59,8 +63,8 @@ TEST(PipelineModels, SemanticSegmenterLabelsTableAndChairs) {
   const auto model = test::models_dir() / "deeplabv3-mnv2-voc-257.onnx";
   if (!std::filesystem::exists(model)) GTEST_SKIP() << "model missing: " << model;
   test::TempDir out("semap_pipeline_semantic");
-  const nlohmann::json report = run_with(kitchen, out.path(), "semantic:" + model.string());
-  EXPECT_GE(report["summary"]["segmented_frames"].get<int>(), 8);
+  const RunResult result = run_with(kitchen, out.path(), "semantic:" + model.string());
+  EXPECT_GE(result.mapper.segmented_frames, 8u);
   const TriangleMesh mesh = read_ply(out / "mesh.ply");
   std::printf("semantic: %zu table, %zu chair vertices of %zu\n", vertices_labelled(mesh, Label::kTable),
               vertices_labelled(mesh, Label::kChair), mesh.vertices.size());

@@ -6,7 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/progress.hpp"
-#include "pipeline/mapper.hpp"
+#include "pipeline/run_pipeline.hpp"
 #include "synth/synth_config.hpp"
 #include "test_support.hpp"
 
@@ -48,40 +48,38 @@ TEST(Determinism, MultiThreadMetricsMatchOneThreadWithinTolerance) {
     RunOptions o;
     o.dataset = tmp / "data";
     o.out_dir = tmp / name;
-    o.poses = "groundtruth";
+    o.poses = PoseSource::groundtruth;
     o.segmenter = "groundtruth";
     o.seg_noise = 0.1;  // the simulated imperfect segmenter: labels differ per frame
     o.show_progress = false;
     return run_pipeline(o, config);
   };
-  const nlohmann::json ref = run(1, "t1");
-  const auto& rs = ref["evaluation"]["semantic"];
-  const auto& ro = ref["evaluation"]["objects"];
-  ASSERT_FALSE(rs.is_null());
-  ASSERT_FALSE(ro.is_null());
+  const RunResult ref = run(1, "t1");
+  ASSERT_TRUE(ref.evaluation.semantic);
+  ASSERT_TRUE(ref.evaluation.objects);
+  const SemanticEvaluation& rs = *ref.evaluation.semantic;
+  const ObjectEvaluation& ro = *ref.evaluation.objects;
   // The reference itself is a sensible map (else agreeing with it means little).
-  EXPECT_GE(rs["miou"].get<double>(), 0.5);
+  EXPECT_GE(rs.miou, 0.5);
   for (int threads : {2, 4}) {
     SCOPED_TRACE("threads " + std::to_string(threads));
-    const nlohmann::json r = run(threads, "t" + std::to_string(threads));
-    const auto& s = r["evaluation"]["semantic"];
-    const auto& o = r["evaluation"]["objects"];
-    EXPECT_EQ(r["summary"]["frames"], ref["summary"]["frames"]);
-    EXPECT_EQ(r["summary"]["frames_skipped"], ref["summary"]["frames_skipped"]);
-    EXPECT_EQ(r["summary"]["segmentations_dropped"].get<int>(), 0);
-    EXPECT_EQ(r["summary"]["object_frames"], ref["summary"]["object_frames"]);
-    EXPECT_NEAR(s["miou"].get<double>(), rs["miou"].get<double>(), kMiouTolerance);
-    EXPECT_NEAR(s["completeness"].get<double>(), rs["completeness"].get<double>(), kCompletenessTolerance);
-    EXPECT_NEAR(o["wov"].get<double>(), ro["wov"].get<double>(), kWovTolerance);
-    EXPECT_EQ(r["summary"]["objects"], ref["summary"]["objects"]);
-    EXPECT_NEAR(s["surface_error_mean_m"].get<double>(), rs["surface_error_mean_m"].get<double>(), kSurfaceErrorTolerance);
+    const RunResult r = run(threads, "t" + std::to_string(threads));
+    const SemanticEvaluation& s = r.evaluation.semantic.value();
+    const ObjectEvaluation& o = r.evaluation.objects.value();
+    EXPECT_EQ(r.frames_read, ref.frames_read);
+    EXPECT_EQ(r.frames_skipped, ref.frames_skipped);
+    EXPECT_EQ(r.mapper.segmentations_dropped, 0u);
+    EXPECT_EQ(r.mapper.object_frames, ref.mapper.object_frames);
+    EXPECT_NEAR(s.miou, rs.miou, kMiouTolerance);
+    EXPECT_NEAR(s.completeness, rs.completeness, kCompletenessTolerance);
+    EXPECT_NEAR(o.wov, ro.wov, kWovTolerance);
+    EXPECT_EQ(r.mapper.objects, ref.mapper.objects);
+    EXPECT_NEAR(s.surface_error_mean_m, rs.surface_error_mean_m, kSurfaceErrorTolerance);
     std::printf("threads %d: mIoU %.4f (1 thread %.4f), completeness %.4f (%.4f), surface error %.4f (%.4f) m, "
-                "WOv %.4f (%.4f), objects %d (%d), object frames %d (%d)\n",
-                threads, s["miou"].get<double>(), rs["miou"].get<double>(), s["completeness"].get<double>(),
-                rs["completeness"].get<double>(), s["surface_error_mean_m"].get<double>(),
-                rs["surface_error_mean_m"].get<double>(), o["wov"].get<double>(), ro["wov"].get<double>(),
-                r["summary"]["objects"].get<int>(), ref["summary"]["objects"].get<int>(),
-                r["summary"]["object_frames"].get<int>(), ref["summary"]["object_frames"].get<int>());
+                "WOv %.4f (%.4f), objects %zu (%zu), object frames %zu (%zu)\n",
+                threads, s.miou, rs.miou, s.completeness, rs.completeness, s.surface_error_mean_m,
+                rs.surface_error_mean_m, o.wov, ro.wov, r.mapper.objects, ref.mapper.objects, r.mapper.object_frames,
+                ref.mapper.object_frames);
   }
 }
 

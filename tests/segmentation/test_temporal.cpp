@@ -44,9 +44,9 @@ FilterRun run_filters(int step) {
   noise.flicker_rate = 0.2;
   noise.pixel_flicker_rate = 0.05;
   TemporalFilterConfig seed_cfg;
-  seed_cfg.method = "seed";
+  seed_cfg.method = TemporalMethod::seed;
   TemporalFilterConfig warped_cfg = seed_cfg;
-  warped_cfg.method = "warped";
+  warped_cfg.method = TemporalMethod::warped;
   TemporalLabelFilter seed_filter(seed_cfg, k), warped_filter(warped_cfg, k);
   FilterRun run;
   const int frames = 24, loop = 300;
@@ -81,7 +81,7 @@ TEST(TemporalFilter, BothVariantsReduceWrongLabelsOnNoisySynthetic) {
 
 TEST(TemporalFilter, StaticCameraSeedKeepsConsistentLabels) {
   TemporalFilterConfig cfg;
-  cfg.method = "seed";
+  cfg.method = TemporalMethod::seed;
   TemporalLabelFilter f(cfg, PinholeIntrinsics{});
   cv::Mat labels(10, 10, CV_8UC1, cv::Scalar(5));
   for (int i = 0; i < 4; ++i) EXPECT_EQ(cv::countNonZero(f.apply(labels)), 0);  // no history yet

@@ -1,0 +1,41 @@
+#include "pipeline/outputs.hpp"
+
+#include "core/error.hpp"
+#include "core/paths.hpp"
+#include "io/ply_io.hpp"
+#include "io/trajectory_io.hpp"
+
+namespace semap {
+
+MapOutputs collect_outputs(const Mapper& mapper) {
+  return {mapper.trajectory(), mapper.mesh(), mapper.objects()};
+}
+
+void write_objects(const std::vector<ObjectSummary>& objects, const std::filesystem::path& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir / "objects", ec);
+  if (ec) throw Error(dir / "objects", "cannot create output folder: " + ec.message());
+  for (const ObjectSummary& o : objects) {
+    PointCloud cloud;
+    cloud.points = o.points;
+    cloud.colours = o.colours;
+    write_ply(dir / "objects" / (std::to_string(o.id) + ".ply"), cloud);  // atomic
+  }
+  write_file_atomic(dir / "objects.json", objects_json(objects).dump(2) + "\n");
+}
+
+void write_map_outputs(const Mapper& mapper, const MapOutputs& outputs, const std::filesystem::path& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw Error(dir, "cannot create output folder: " + ec.message());
+  write_tum_trajectory(dir / "trajectory.txt", outputs.trajectory);
+  write_ply(dir / "mesh.ply", outputs.mesh);
+  write_objects(outputs.objects, dir);
+  mapper.save(dir / "map.semap");
+}
+
+void write_map_outputs(const Mapper& mapper, const std::filesystem::path& dir) {
+  write_map_outputs(mapper, collect_outputs(mapper), dir);
+}
+
+}  // namespace semap

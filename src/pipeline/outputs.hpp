@@ -1,0 +1,32 @@
+#pragma once
+// Writers over a Mapper's state: what `semap run` leaves in its output folder. Each file is
+// written to a temporary name and renamed, so an interrupted write never looks complete.
+//
+//   trajectory.txt     TUM format, every frame, T_world_camera
+//   mesh.ply           binary PLY, vertex x y z red green blue label instance
+//   objects.json       + objects/<id>.ply (schema in SHARED_FORMATS.md)
+//   map.semap          the TSDF map (versioned, checksummed)
+#include <filesystem>
+#include <vector>
+
+#include "objects/object_mapper.hpp"
+#include "pipeline/mapper.hpp"
+
+namespace semap {
+
+/// The map products read once from a Mapper (the mesh is extracted once for every writer).
+struct MapOutputs {
+  Trajectory trajectory;
+  TriangleMesh mesh;
+  std::vector<ObjectSummary> objects;
+};
+MapOutputs collect_outputs(const Mapper& mapper);
+
+/// Writes trajectory.txt, mesh.ply, objects.json + objects/*.ply and map.semap into `dir`
+/// (created when missing). Throws semap::Error naming the file that cannot be written.
+void write_map_outputs(const Mapper& mapper, const MapOutputs& outputs, const std::filesystem::path& dir);
+void write_map_outputs(const Mapper& mapper, const std::filesystem::path& dir);
+/// objects.json + objects/<id>.ply.
+void write_objects(const std::vector<ObjectSummary>& objects, const std::filesystem::path& dir);
+
+}  // namespace semap

@@ -1,0 +1,255 @@
+#include "pipeline/run_pipeline.hpp"
+
+#include <spdlog/spdlog.h>
+#include <tbb/global_control.h>
+
+#include <opencv2/imgcodecs.hpp>
+#include <thread>
+
+#include "core/error.hpp"
+#include "core/paths.hpp"
+#include "core/progress.hpp"
+#include "io/dataset.hpp"
+#include "pipeline/bounded_queue.hpp"
+#include "pipeline/report.hpp"
+#include "pipeline/simulated_segmenter.hpp"
+#include "segmentation/segmenter_factory.hpp"
+
+namespace semap {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+/// A frame as read from the dataset; nullopt when it was unreadable (skipped).
+struct LoadedFrame {
+  size_t index = 0;
+  std::optional<Frame> frame;
+};
+
+/// Reads frames 0..count-1 in order, ahead of the consumer on its own thread (PNG decoding
+/// overlaps tracking), or on demand when not threaded.
+class Prefetcher {
+ public:
+  Prefetcher(size_t count, size_t capacity, bool threaded, std::function<std::optional<Frame>(size_t)> load)
+      : count_(count), load_(std::move(load)), queue_(capacity) {
+    if (threaded)
+      thread_ = std::thread([this] {
+        for (size_t i = 0; i < count_; ++i)
+          if (!queue_.push({i, load_(i)})) break;
+        queue_.close();
+      });
+  }
+  ~Prefetcher() {
+    queue_.close();
+    if (thread_.joinable()) thread_.join();
+  }
+  std::optional<LoadedFrame> next() {
+    if (thread_.joinable()) return queue_.pop();
+    if (next_ >= count_) return std::nullopt;
+    const size_t i = next_++;
+    return LoadedFrame{i, load_(i)};
+  }
+
+ private:
+  size_t count_, next_ = 0;
+  std::function<std::optional<Frame>(size_t)> load_;
+  BoundedQueue<LoadedFrame> queue_;
+  std::thread thread_;
+};
+
+std::string resolved_spec(const RunOptions& options, const SemapConfig& config) {
+  return options.segmenter.empty() ? config.segmentation.segmenter : options.segmenter;
+}
+
+std::map<std::string, int> objects_per_class(const std::vector<ObjectSummary>& objects) {
+  std::map<std::string, int> out;
+  for (const ObjectSummary& o : objects) ++out[std::string(class_name(o.class_id))];
+  return out;
+}
+
+std::vector<ReportObject> report_objects(const std::vector<ObjectSummary>& objects) {
+  std::vector<ReportObject> out;
+  for (const ObjectSummary& o : objects) {
+    ReportObject r{o.id, o.class_id, {}};
+    for (int k = 0; k < 8; ++k) {
+      const Eigen::Vector3f s((k & 1) ? 0.5f : -0.5f, (k & 2) ? 0.5f : -0.5f, (k & 4) ? 0.5f : -0.5f);
+      r.corners[k] = (o.box.center + o.box.rotation * s.cwiseProduct(o.box.extent)).cast<double>();
+    }
+    out.push_back(r);
+  }
+  return out;
+}
+
+/// Feeds every readable frame to the mapper; returns (frames fed, frames skipped).
+std::pair<size_t, size_t> feed_frames(Mapper& mapper, const DatasetReader& dataset, const RunOptions& options,
+                                      size_t frame_count) {
+  std::atomic<size_t> skipped{0};
+  auto load = [&](size_t i) -> std::optional<Frame> {
+    const auto t0 = Clock::now();
+    try {
+      Frame frame = dataset.load(i);
+      mapper.add_timing("read", seconds_since(t0) * 1e3);
+      return frame;
+    } catch (const Error& e) {
+      spdlog::warn("skipping frame {}: {}", i, e.what());
+      ++skipped;
+      return std::nullopt;
+    }
+  };
+  const SemapConfig& config = mapper.config();
+  Prefetcher frames(frame_count, static_cast<size_t>(config.pipeline.queue_size), config.pipeline.threads > 1, load);
+  Progress progress("semap run", frame_count);
+  size_t fed = 0, objects = 0;
+  while (auto loaded = frames.next()) {
+    if (loaded->frame) {
+      FrameHints hints;
+      if (options.poses == PoseSource::groundtruth) hints.T_world_camera = loaded->frame->gt_T_world_camera;
+      if (hints.T_world_camera && !is_valid_pose(*hints.T_world_camera, 1e-4)) hints.T_world_camera.reset();
+      if (options.poses == PoseSource::groundtruth && !hints.T_world_camera) {
+        spdlog::warn("skipping frame {}: no valid ground-truth pose", loaded->index);
+        ++skipped;
+      } else {
+        mapper.add_frame(*loaded->frame, std::move(hints));
+        ++fed;
+      }
+    }
+    if (options.show_progress && loaded->index % 10 == 0) objects = mapper.stats().objects;
+    if (options.show_progress) progress.update(loaded->index + 1, "objects " + std::to_string(objects));
+  }
+  if (options.show_progress) progress.finish("objects " + std::to_string(mapper.stats().objects));
+  return {fed, skipped.load()};
+}
+
+/// Refuses to publish a run that mapped nothing useful (issue 22: no silent empty outputs).
+void check_run_is_usable(const DatasetReader& dataset, const MapperStats& stats, const MapOutputs& outputs,
+                         size_t skipped) {
+  if (stats.frames == 0)
+    throw Error(dataset.root(), "no frame could be used: all " + std::to_string(skipped) +
+                                    " were unreadable or without a valid pose (see the warnings above)");
+  if (stats.segmented_frames > 0 && stats.segmentations_failed == stats.segmented_frames)
+    throw Error(dataset.root(), "every segmentation failed (" + stats.segmentation_error + ")");
+  if (outputs.mesh.vertices.empty())
+    throw Error(dataset.root(), "the map is empty: no frame had valid depth within tsdf.min_range..max_range");
+}
+
+void write_run_report(const std::filesystem::path& dir, const RunResult& result, const MapOutputs& outputs) {
+  const cv::Mat topdown = render_topdown(outputs.mesh, outputs.trajectory, report_objects(outputs.objects));
+  write_atomic_with(dir / "topdown.png", [&](const std::filesystem::path& tmp) {
+    if (!cv::imwrite(tmp.string() + ".png", topdown)) throw Error(dir / "topdown.png", "cannot write");
+    std::filesystem::rename(tmp.string() + ".png", tmp);
+  });
+  const nlohmann::json report = to_json(result);
+  write_file_atomic(dir / "report.json", report.dump(2) + "\n");
+  write_report_html(dir, report);
+}
+
+}  // namespace
+
+std::unique_ptr<Segmenter> make_run_segmenter(const RunOptions& options, const SemapConfig& config,
+                                              const DatasetReader& dataset) {
+  const std::string spec = resolved_spec(options, config);
+  const bool simulated = options.seg_noise > 0;
+  if ((spec == "groundtruth" || simulated) && !dataset.has_label_ground_truth())
+    throw Error(dataset.root(), "--segmenter groundtruth / --seg-noise need per-frame label images, this dataset has none");
+  if (!simulated) return make_segmenter(spec, config.segmentation, dataset.camera());
+  SegmentationNoiseParams noise = config.simulated_segmentation;
+  noise.flicker_rate = options.seg_noise;
+  return std::make_unique<SimulatedSegmenter>(make_segmenter("groundtruth", config.segmentation, dataset.camera()),
+                                              noise, 1);
+}
+
+RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
+  config.validate();
+  const auto wall_start = Clock::now();
+  tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, config.pipeline.threads);
+  const auto dataset = open_dataset(options.dataset);
+  const size_t frame_count = options.max_frames > 0 ? std::min(options.max_frames, dataset->size()) : dataset->size();
+  if (frame_count == 0) throw Error(options.dataset, "dataset has no frames");
+  const bool poses_given = options.poses == PoseSource::groundtruth;
+  if (poses_given && !dataset->has_ground_truth())
+    throw Error(options.dataset, "--poses groundtruth needs a ground-truth trajectory, this dataset has none");
+
+  std::unique_ptr<Segmenter> segmenter = make_run_segmenter(options, config, *dataset);
+  if (!segmenter && options.show_progress)
+    std::fprintf(stderr, "semap run: no segmenter: mapping geometry and colour only (add --segmenter "
+                         "yolo:MODEL.onnx for classes and objects)\n");
+  SemapConfig mapper_config = config;
+  mapper_config.segmentation.segmenter = "none";  // the segmenter is built here, once
+  Mapper mapper(mapper_config, dataset->camera(), std::move(segmenter));
+  mapper.set_frame_reloader([&](size_t i, bool need_colour) {
+    if (need_colour) return dataset->load(i);
+    Frame frame;
+    frame.index = i;
+    frame.depth = dataset->load_depth(i);
+    return frame;
+  });
+
+  const auto [fed, skipped] = feed_frames(mapper, *dataset, options, frame_count);
+  const double online_s = seconds_since(wall_start);
+  mapper.finish();
+  const MapOutputs outputs = collect_outputs(mapper);
+  RunResult result;
+  result.mapper = mapper.stats();
+  check_run_is_usable(*dataset, result.mapper, outputs, skipped);
+
+  write_map_outputs(mapper, outputs, options.out_dir);
+  if (options.evaluate) result.evaluation = evaluate_run(*dataset, outputs, poses_given);
+  result.dataset = options.dataset.string();
+  result.poses = options.poses;
+  result.frames_read = fed;
+  result.frames_skipped = skipped;
+  result.mesh_vertices = outputs.mesh.vertices.size();
+  result.mesh_triangles = outputs.mesh.triangles.size();
+  result.objects_per_class = objects_per_class(outputs.objects);
+  result.threads = config.pipeline.threads;
+  result.timings = mapper.timings();
+  result.fps_online = static_cast<double>(fed + skipped) / std::max(online_s, 1e-9);
+  result.wall_s = seconds_since(wall_start);
+  result.fps_end_to_end = static_cast<double>(fed + skipped) / std::max(result.wall_s, 1e-9);
+  result.peak_rss_mb = static_cast<double>(peak_rss_bytes()) / (1024.0 * 1024.0);
+  write_run_report(options.out_dir, result, outputs);
+  return result;
+}
+
+nlohmann::json to_json(const RunResult& r) {
+  const MapperStats& m = r.mapper;
+  nlohmann::json report;
+  report["dataset"] = r.dataset;
+  report["summary"] = {
+      {"frames", r.frames_read + r.frames_skipped},
+      {"frames_skipped", r.frames_skipped},
+      {"frames_lost", m.lost_frames},
+      {"keyframes", m.keyframes},
+      {"segmented_frames", m.segmented_frames},
+      {"segmentations_dropped", m.segmentations_dropped},
+      {"segmentations_failed", m.segmentations_failed},
+      {"object_frames", m.object_frames},
+      {"object_accumulations_skipped", m.object_accumulations_skipped},
+      {"objects", m.objects},
+      {"poses", std::string(enum_name(kPoseSourceNames, r.poses))},
+      {"segmenter", m.segmenter},
+      {"loop_edges", m.loop_edges},
+      {"map_refreshed_with_optimised_poses", m.map_refreshed},
+      {"max_pose_correction_m", m.max_pose_correction_m},
+      {"refresh_archive_mb", static_cast<double>(m.refresh_archive_bytes) / (1024.0 * 1024.0)},
+      {"mesh_vertices", r.mesh_vertices},
+      {"mesh_triangles", r.mesh_triangles},
+      {"fps_online", r.fps_online},
+      {"fps_end_to_end", r.fps_end_to_end},
+      {"wall_s", r.wall_s},
+      {"peak_rss_mb", r.peak_rss_mb},
+      {"threads", r.threads},
+  };
+  if (!m.map_refresh_note.empty()) report["summary"]["map_refresh_note"] = m.map_refresh_note;
+  report["objects_per_class"] = r.objects_per_class;
+  report["evaluation"] = to_json(r.evaluation);
+  report["timings"] = timings_json(r.timings);
+  if (!m.external_poses)
+    report["tracking"] = {{"keyframes", m.keyframes}, {"lost_frames", m.lost_frames},
+                          {"relocalisations", m.relocalisations}, {"loop_edges", m.loop_edges},
+                          {"optimisations", m.optimisations}};
+  return report;
+}
+
+}  // namespace semap

@@ -1,0 +1,65 @@
+#pragma once
+// `semap run` as a library call: the dataset loop around a semap::Mapper. It reads the
+// dataset on its own thread, feeds the Mapper, shows progress, writes the outputs, evaluates
+// against ground truth when there is some, and writes the report.
+#include <filesystem>
+#include <map>
+#include <string>
+
+#include "core/params.hpp"
+#include "pipeline/evaluation.hpp"
+#include "pipeline/mapper.hpp"
+#include "pipeline/semap_config.hpp"
+
+namespace semap {
+
+enum class PoseSource {
+  track,        ///< semap tracks the camera (METHODS A1-A4)
+  groundtruth,  ///< the dataset's ground-truth poses (frames without one are skipped)
+};
+inline constexpr EnumNames<PoseSource, 2> kPoseSourceNames{
+    {{PoseSource::track, "track"}, {PoseSource::groundtruth, "groundtruth"}}};
+
+struct RunOptions {
+  std::filesystem::path dataset;
+  std::filesystem::path out_dir;
+  PoseSource poses = PoseSource::track;
+  /// yolo:PATH | semantic:PATH | groundtruth | precomputed:DIR | none; empty: the config's
+  /// segmentation.segmenter (default none: geometry and colour only).
+  std::string segmenter;
+  double seg_noise = 0.0;  ///< > 0: built-in noisy segmentation of ground-truth labels (flicker rate)
+  size_t max_frames = 0;   ///< 0 = all
+  bool evaluate = true;    ///< evaluation figures when ground truth exists
+  bool show_progress = true;
+};
+
+/// What a run produced: the report.json document, typed.
+struct RunResult {
+  std::string dataset;
+  PoseSource poses = PoseSource::track;
+  MapperStats mapper;
+  size_t frames_read = 0;     ///< frames handed to the Mapper
+  size_t frames_skipped = 0;  ///< unreadable frames, or without a valid ground-truth pose
+  size_t mesh_vertices = 0, mesh_triangles = 0;
+  std::map<std::string, int> objects_per_class;
+  double fps_online = 0.0;      ///< frames / time of the streaming stages
+  double fps_end_to_end = 0.0;  ///< frames / whole run (final pass, refresh, outputs included)
+  double wall_s = 0.0;
+  double peak_rss_mb = 0.0;
+  int threads = 1;
+  Evaluation evaluation;
+  std::map<std::string, TimingSummary> timings;
+};
+nlohmann::json to_json(const RunResult& result);
+
+/// Runs the whole pipeline and writes every output into options.out_dir. Returns the result
+/// (also written as report.json). Throws semap::Error on bad input.
+RunResult run_pipeline(const RunOptions& options, const SemapConfig& config);
+
+/// The segmenter a run uses (nullptr: none): the spec of the options or else of the config,
+/// or the built-in noisy one for seg_noise > 0. Throws semap::Error for a spec the dataset
+/// cannot serve (ground-truth labels on a dataset without label images).
+std::unique_ptr<Segmenter> make_run_segmenter(const RunOptions& options, const SemapConfig& config,
+                                              const DatasetReader& dataset);
+
+}  // namespace semap
