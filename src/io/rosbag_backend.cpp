@@ -77,6 +77,24 @@ MessageType type_of(const std::string& datatype) {
 
 Stamp stamp_of(const ros::Time& t) { return {t.sec, t.nsec}; }
 
+/// Header stamp, size and encoding of an Image / CompressedImage message, and its bag time.
+ImageMeta meta_of(const rosbag::MessageInstance& m, const std::filesystem::path& bag) {
+  ImageMeta meta;
+  const MessageType type = type_of(m.getDataType());
+  if (type == MessageType::image) meta = m.instantiate<MetaMessage<false>>()->meta;
+  else if (type == MessageType::compressed_image) meta = m.instantiate<MetaMessage<true>>()->meta;
+  else throw Error(bag, m.getTopic() + " is " + m.getDataType() + ", not an image topic");
+  meta.bag_stamp = stamp_of(m.getTime());
+  return meta;
+}
+
+CompressedData compressed_of(sensor_msgs::CompressedImage& msg) {
+  CompressedData out;
+  out.format = msg.format;
+  out.data.swap(msg.data);
+  return out;
+}
+
 }  // namespace
 
 bool available() { return true; }
@@ -149,24 +167,14 @@ std::vector<Topic> Bag::topics() const {
 ImageMeta Bag::first_image_meta(const std::string& topic) const {
   return impl_->guarded("cannot read " + topic, [&] {
     rosbag::View view(impl_->bag, rosbag::TopicQuery(topic));
-    for (const rosbag::MessageInstance& m : view) {
-      const MessageType type = type_of(m.getDataType());
-      ImageMeta meta = type == MessageType::image ? m.instantiate<MetaMessage<false>>()->meta
-                                                  : m.instantiate<MetaMessage<true>>()->meta;
-      meta.bag_stamp = stamp_of(m.getTime());
-      return meta;
-    }
+    for (const rosbag::MessageInstance& m : view) return meta_of(m, impl_->path);
     throw Error(impl_->path, "topic " + topic + " has no message");
   });
 }
 
 CompressedData Bag::first_compressed(const std::string& topic) const {
   return impl_->guarded("cannot read " + topic, [&] {
-    const auto msg = impl_->first<sensor_msgs::CompressedImage>(topic);
-    CompressedData out;
-    out.format = msg->format;
-    out.data.swap(msg->data);
-    return out;
+    return compressed_of(*impl_->first<sensor_msgs::CompressedImage>(topic));
   });
 }
 
@@ -192,11 +200,7 @@ std::vector<IndexedMessage> Bag::index(const std::vector<std::string>& topics) c
       IndexedMessage im;
       for (size_t k = 0; k < topics.size(); ++k)
         if (topics[k] == m.getTopic()) im.topic = k;
-      const MessageType type = type_of(m.getDataType());
-      if (type == MessageType::image) im.meta = m.instantiate<MetaMessage<false>>()->meta;
-      else if (type == MessageType::compressed_image) im.meta = m.instantiate<MetaMessage<true>>()->meta;
-      else throw Error(impl_->path, m.getTopic() + " is " + m.getDataType() + ", not an image topic");
-      im.meta.bag_stamp = stamp_of(m.getTime());
+      im.meta = meta_of(m, impl_->path);
       im.handle = impl_->messages.size();
       impl_->messages.push_back(m);
       out.push_back(std::move(im));
@@ -224,10 +228,7 @@ CompressedData Bag::read_compressed(size_t handle) const {
   return impl_->guarded("cannot read a compressed image message", [&] {
     const auto msg = impl_->message(handle).instantiate<sensor_msgs::CompressedImage>();
     if (!msg) throw Error(impl_->path, impl_->message(handle).getTopic() + ": not a sensor_msgs/CompressedImage");
-    CompressedData out;
-    out.format = msg->format;
-    out.data.swap(msg->data);
-    return out;
+    return compressed_of(*msg);
   });
 }
 
