@@ -9,6 +9,7 @@ PACKAGES=(
   nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev libyaml-cpp-dev
   libgtest-dev libgmock-dev libbenchmark-dev libnanoflann-dev
   libopen3d-dev libcpp-httplib-dev libdeflate-dev
+  librosbag-storage-dev libsensor-msgs-dev libopenni2-dev
 )
 # Extra packages can be requested by callers, e.g. the CI adds clang for fuzzing.
 PACKAGES+=("$@")

@@ -2,9 +2,13 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+#include <cctype>
+
 #include "core/error.hpp"
 #include "io/dataset_layouts.hpp"
 #include "io/image_io.hpp"
+#include "io/rosbag_backend.hpp"
 
 namespace semap {
 
@@ -39,24 +43,43 @@ std::string detect_layout(const fs::path& root) {
   if (is_ycb_layout(root)) return "ycb";
   if (fs::exists(root / "scene.json") || fs::exists(root / "label.txt"))
     throw Error(root, "looks like the synthetic layout (scene.json/label.txt) but has no dataset.yaml naming the camera");
+  if (fs::exists(root / "intrinsic" / "intrinsic_depth.txt")) return "scannet";
   if (fs::exists(root / "rgb.txt") || fs::exists(root / "depth.txt")) return "tum";
   throw Error(root, "no known dataset layout: looked for dataset.yaml, TUM (rgb.txt + depth.txt), 7-Scenes "
                     "(frame-XXXXXX.color.jpg / camera-intrinsics.txt), YCB-Video "
-                    "(data/NNNN/XXXXXX-color.png) and synthetic (dataset.yaml + label.txt)");
+                    "(data/NNNN/XXXXXX-color.png), ScanNet export (intrinsic/intrinsic_depth.txt, color/, "
+                    "depth/) and synthetic (dataset.yaml + label.txt)");
+}
+
+std::string lower_extension(const fs::path& path) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext;
+}
+
+/// Single-file formats: ROS1 bags and ScanNet .sens recordings.
+std::unique_ptr<DatasetReader> open_file(const fs::path& file, const DatasetOptions& options) {
+  const std::string ext = lower_extension(file);
+  if (ext == ".bag") return io_detail::open_rosbag(file, options);
+  if (ext == ".sens") return io_detail::open_scannet_sens(file);
+  throw Error(file, "not a folder (expected a dataset folder, a ROS .bag or a ScanNet .sens file)");
 }
 
 std::unique_ptr<DatasetReader> open_layout(const fs::path& root, const DatasetOptions& options);
 
 }  // namespace
 
-cv::Mat DatasetReader::load_depth(size_t i) const {
+void DatasetReader::check_index(size_t i) const {
   if (i >= records_.size())
     throw Error(root_, "frame " + std::to_string(i) + " out of range (" + std::to_string(records_.size()) + " frames)");
+}
+
+cv::Mat DatasetReader::load_depth(size_t i) const {
+  check_index(i);
   return read_depth_image(records_[i].depth, camera_.depth_scale, cv::Size(camera_.depth.width, camera_.depth.height));
 }
 
-Frame DatasetReader::load(size_t i) const {
-  cv::Mat depth = load_depth(i);  // checks i
+Frame DatasetReader::make_frame(size_t i, cv::Mat depth, cv::Mat rgb, const fs::path& rgb_source) const {
   const FrameRecord& rec = records_[i];
   Frame frame;
   frame.index = i;
@@ -65,14 +88,21 @@ Frame DatasetReader::load(size_t i) const {
   frame.depth_path = rec.depth.string();
   frame.gt_T_world_camera = rec.gt_T_world_camera;
   frame.depth = std::move(depth);
-  frame.rgb = read_colour_image(rec.rgb);
+  frame.rgb = std::move(rgb);
   if (!camera_.colour && frame.rgb.size() != frame.depth.size())
-    throw Error(rec.rgb, "RGB image is " + size_text(frame.rgb.size()) + " but depth image " + rec.depth.string() +
-                             " is " + size_text(frame.depth.size()) + " (colour is registered to depth, sizes must match)");
+    throw Error(rgb_source, "RGB image is " + size_text(frame.rgb.size()) + " but depth image " + rec.depth.string() +
+                                " is " + size_text(frame.depth.size()) + " (colour is registered to depth, sizes must match)");
   const PinholeIntrinsics& colour = camera_.colour_intrinsics();
   if (frame.rgb.size() != cv::Size(colour.width, colour.height))
-    throw Error(rec.rgb, "RGB image is " + size_text(frame.rgb.size()) + ", camera expects " +
-                             size_text({colour.width, colour.height}));
+    throw Error(rgb_source, "RGB image is " + size_text(frame.rgb.size()) + ", camera expects " +
+                                size_text({colour.width, colour.height}));
+  return frame;
+}
+
+Frame DatasetReader::load(size_t i) const {
+  cv::Mat depth = load_depth(i);  // checks i
+  const FrameRecord& rec = records_[i];
+  Frame frame = make_frame(i, std::move(depth), read_colour_image(rec.rgb), rec.rgb);
   if (!rec.labels.empty()) {
     const cv::Mat raw = read_label_image(rec.labels, frame.rgb.size());
     double max_value = 0;
@@ -107,10 +137,16 @@ std::unique_ptr<DatasetReader> open_dataset(const fs::path& folder, const Datase
   fs::path root = folder.lexically_normal();
   if (root.has_parent_path() && root.filename().empty()) root = root.parent_path();  // "dir/" -> "dir"
   std::error_code ec;
-  if (!fs::exists(root, ec)) throw Error(root, "dataset folder not found");
-  if (!fs::is_directory(root, ec)) throw Error(root, "not a folder (expected a dataset folder)");
+  const std::string ext = lower_extension(root);
+  const bool file_format = ext == ".bag" || ext == ".sens";
+  if (!fs::exists(root, ec)) throw Error(root, file_format ? "file not found" : "dataset folder not found");
+  const bool is_folder = fs::is_directory(root, ec);
+  if (!is_folder && !fs::is_regular_file(root, ec))
+    throw Error(root, "not a folder or a regular file (expected a dataset folder, a .bag or a .sens file)");
   try {
-    return open_layout(root, options);
+    auto reader = is_folder ? open_layout(root, options) : open_file(root, options);
+    if (reader->size() == 0) throw Error(root, "dataset has no frames");
+    return reader;
   } catch (const fs::filesystem_error& e) {
     throw Error(e.path1().empty() ? root : e.path1(), e.code().message());
   }
@@ -127,12 +163,14 @@ std::unique_ptr<DatasetReader> open_layout(const fs::path& root, const DatasetOp
   else if (layout == "7scenes") reader = io_detail::open_7scenes(root, y);
   else if (layout == "ycb") reader = io_detail::open_ycb(root, y);
   else if (layout == "synthetic") reader = io_detail::open_synthetic(root, y, options);
-  else throw Error(root / "dataset.yaml", "unknown format '" + layout + "' (tum, 7scenes, ycb, synthetic)");
-  if (reader->size() == 0) throw Error(root, "dataset has no frames");
+  else if (layout == "scannet") reader = io_detail::open_scannet(root, y);
+  else throw Error(root / "dataset.yaml", "unknown format '" + layout + "' (tum, 7scenes, ycb, synthetic, scannet)");
   return reader;
 }
 
 }  // namespace
+
+bool have_rosbag_support() { return io_detail::rosbag_backend::available(); }
 
 CameraModel tum_camera_preset(int freiburg) {
   // Published TUM RGB-D calibrations (ROS default for depth scale 5000 = 1/5 mm).

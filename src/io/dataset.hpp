@@ -24,8 +24,9 @@ struct FrameRecord {
 class DatasetReader {
  public:
   virtual ~DatasetReader() = default;
-  /// "tum", "7scenes", "ycb", "synthetic", "yaml".
+  /// "tum", "7scenes", "ycb", "synthetic", "scannet", "scannet-sens", "rosbag".
   virtual std::string format() const = 0;
+  /// The dataset folder, or the file (.bag, .sens) for single-file formats.
   const std::filesystem::path& root() const { return root_; }
   const CameraModel& camera() const { return camera_; }
   size_t size() const { return records_.size(); }
@@ -33,7 +34,7 @@ class DatasetReader {
   /// Decodes frame i (throws semap::Error naming the file when it is unreadable/inconsistent).
   virtual Frame load(size_t i) const;
   /// Decodes only the depth image of frame i (CV_32FC1 metres), validated as load() does.
-  cv::Mat load_depth(size_t i) const;
+  virtual cv::Mat load_depth(size_t i) const;
   /// Ground-truth trajectory of the sequence (per frame, where known).
   Trajectory ground_truth() const;
   bool has_ground_truth() const;
@@ -41,20 +42,34 @@ class DatasetReader {
   bool has_label_ground_truth() const;
 
  protected:
+  /// Frame i from its decoded images (metadata from records_[i]); checks the image sizes
+  /// against the camera, errors naming `rgb_source`.
+  Frame make_frame(size_t i, cv::Mat depth, cv::Mat rgb, const std::filesystem::path& rgb_source) const;
+  /// Throws naming root_ when i is out of range.
+  void check_index(size_t i) const;
+
   std::filesystem::path root_;
   CameraModel camera_;
   std::vector<FrameRecord> records_;
 };
 
-/// Detects the layout of `root` (dataset.yaml beside the data wins) and opens it. Throws
-/// semap::Error naming the folder when it is missing or no layout matches.
+/// Detects the layout of `root` (dataset.yaml beside the data wins) and opens it: a folder
+/// (TUM, 7-Scenes, YCB-Video, synthetic, ScanNet export) or a file (ROS1 .bag, ScanNet .sens).
+/// Throws semap::Error naming the path when it is missing or no layout matches.
 std::unique_ptr<DatasetReader> open_dataset(const std::filesystem::path& root);
 
 struct DatasetOptions {
   /// Synthetic layout: read label_noisy.txt / instance_noisy.txt instead of the clean lists.
   bool noisy_labels = false;
+  /// ROS bags: the colour and depth image topics (sensor_msgs/Image or CompressedImage).
+  /// Empty = chosen automatically when the bag has exactly one of each.
+  std::string rgb_topic;
+  std::string depth_topic;
 };
 std::unique_ptr<DatasetReader> open_dataset(const std::filesystem::path& root, const DatasetOptions& options);
+
+/// False when semap was built without the ROS bag libraries (a .bag then fails to open, saying so).
+bool have_rosbag_support();
 
 /// TUM RGB-D intrinsic presets (freiburg 1, 2 or 3), 640x480, depth scale 5000.
 CameraModel tum_camera_preset(int freiburg);

@@ -66,6 +66,12 @@ std::unique_ptr<DatasetReader> open_7scenes(const std::filesystem::path& root, c
 std::unique_ptr<DatasetReader> open_ycb(const std::filesystem::path& root, const DatasetYaml* yaml);
 std::unique_ptr<DatasetReader> open_synthetic(const std::filesystem::path& root, const DatasetYaml* yaml,
                                               const DatasetOptions& options);
+/// ScanNet exported layout (color/N.jpg, depth/N.png, pose/N.txt, intrinsic/*.txt).
+std::unique_ptr<DatasetReader> open_scannet(const std::filesystem::path& root, const DatasetYaml* yaml);
+/// ScanNet .sens recording (one file: calibration, then per frame pose, JPEG colour, zlib depth).
+std::unique_ptr<DatasetReader> open_scannet_sens(const std::filesystem::path& file);
+/// ROS1 bag (rosbag_dataset.cpp): colour and depth image topics associated by timestamp.
+std::unique_ptr<DatasetReader> open_rosbag(const std::filesystem::path& bag, const DatasetOptions& options);
 
 /// rgb <-> depth records from two lists associated by timestamp (max 0.02 s, one-to-one);
 /// frame timestamp = rgb timestamp; unmatched rgb frames are dropped.

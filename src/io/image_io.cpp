@@ -50,8 +50,7 @@ void check_container(const std::filesystem::path& path, const std::string& bytes
   }
 }
 
-cv::Mat decode(const std::filesystem::path& path) {
-  const std::string bytes = io_detail::read_file_bytes(path);
+cv::Mat decode_bytes(const std::filesystem::path& path, const std::string& bytes) {
   if (bytes.empty()) throw Error(path, "empty image file");
   if (bytes.size() > (size_t{1} << 30)) throw Error(path, "image file larger than 1 GiB");
   check_container(path, bytes);
@@ -66,6 +65,8 @@ cv::Mat decode(const std::filesystem::path& path) {
   if (image.empty()) throw Error(path, "cannot decode image (corrupt, truncated or unsupported format)");
   return image;
 }
+
+cv::Mat decode(const std::filesystem::path& path) { return decode_bytes(path, io_detail::read_file_bytes(path)); }
 
 std::string size_text(cv::Size s) { return std::to_string(s.width) + "x" + std::to_string(s.height); }
 
@@ -88,8 +89,17 @@ std::vector<uchar> encode(const std::filesystem::path& path, const cv::Mat& imag
 
 }  // namespace
 
-cv::Mat read_colour_image(const std::filesystem::path& path) {
-  cv::Mat image = decode(path);
+cv::Mat decode_image_bytes(const std::string& bytes, const std::filesystem::path& source) {
+  return decode_bytes(source, bytes);
+}
+
+cv::Mat decode_colour_bytes(const std::string& bytes, const std::filesystem::path& source) {
+  return to_bgr(source, decode_bytes(source, bytes));
+}
+
+cv::Mat read_colour_image(const std::filesystem::path& path) { return to_bgr(path, decode(path)); }
+
+cv::Mat to_bgr(const std::filesystem::path& path, cv::Mat image) {
   if (image.depth() != CV_8U) throw Error(path, "colour image is not 8-bit");
   if (image.channels() == 3) return image;
   cv::Mat bgr;
@@ -106,6 +116,11 @@ cv::Mat read_depth_image(const std::filesystem::path& path, double depth_scale, 
   if (raw.depth() == CV_8U || raw.depth() == CV_8S) throw Error(path, "8-bit depth image, expected 16-bit");
   if (raw.depth() != CV_16U) throw Error(path, "depth image is not 16-bit unsigned");
   check_size(path, raw, expected_size, "depth image");
+  return depth_units_to_metres(raw, depth_scale);
+}
+
+cv::Mat depth_units_to_metres(const cv::Mat& raw, double depth_scale) {
+  CV_Assert(raw.type() == CV_16UC1 && depth_scale > 0);
   cv::Mat depth(raw.size(), CV_32FC1);
   const float inv_scale = static_cast<float>(1.0 / depth_scale);
   for (int r = 0; r < raw.rows; ++r) {
