@@ -20,10 +20,10 @@
 #include <string>
 #include <vector>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "core/progress.hpp"
-#include "eval/object_metrics.hpp"
-#include "pipeline/run_pipeline.hpp"
+#include "semap/eval/object_metrics.hpp"
+#include "semap/pipeline/run_pipeline.hpp"
 #include "synth/synth_config.hpp"
 #include "tsdf/map_io.hpp"
 

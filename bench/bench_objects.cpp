@@ -16,9 +16,9 @@
 #include <random>
 #include <string>
 
-#include "io/dataset.hpp"
-#include "pipeline/semap_config.hpp"
-#include "segmentation/segmenter_factory.hpp"
+#include "semap/io/dataset.hpp"
+#include "semap/pipeline/semap_config.hpp"
+#include "semap/segmentation/segmenter_factory.hpp"
 #include "objects/object_mapper.hpp"
 #include "synth/synth_config.hpp"
 

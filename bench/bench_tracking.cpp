@@ -15,11 +15,11 @@
 #include <string>
 #include <vector>
 
-#include "core/error.hpp"
-#include "eval/trajectory_metrics.hpp"
-#include "io/config_loader.hpp"
-#include "io/dataset.hpp"
-#include "io/trajectory_io.hpp"
+#include "semap/core/error.hpp"
+#include "semap/eval/trajectory_metrics.hpp"
+#include "semap/io/config_loader.hpp"
+#include "semap/io/dataset.hpp"
+#include "semap/io/trajectory_io.hpp"
 #include "tracking/tracker.hpp"
 
 #include "bench/open3d_odometry.hpp"

@@ -18,7 +18,7 @@
 #include <unistd.h>
 
 #include "core/paths.hpp"
-#include "io/dataset.hpp"
+#include "semap/io/dataset.hpp"
 #include "synth/synth_config.hpp"
 #include "tsdf/semantic_tsdf.hpp"
 

@@ -13,9 +13,9 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
-#include "core/camera.hpp"
-#include "core/frame.hpp"
-#include "core/pose.hpp"
+#include "semap/core/camera.hpp"
+#include "semap/core/frame.hpp"
+#include "semap/core/pose.hpp"
 
 namespace semap::baseline {
 

@@ -1,9 +1,9 @@
 // The one config file (`semap run --config`, `semap config --check`): load_config_string over
 // every section of SemapConfig, then validate(), as load_semap_config does.
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "fuzz/fuzz_util.hpp"
-#include "io/config_loader.hpp"
-#include "pipeline/semap_config.hpp"
+#include "semap/io/config_loader.hpp"
+#include "semap/pipeline/semap_config.hpp"
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   semap::SemapConfig defaults;

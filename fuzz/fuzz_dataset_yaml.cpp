@@ -1,5 +1,5 @@
 // dataset.yaml: read_dataset_yaml + apply_yaml_camera over a TUM preset.
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "fuzz/fuzz_util.hpp"
 #include "io/dataset_layouts.hpp"
 

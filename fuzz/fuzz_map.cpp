@@ -4,7 +4,7 @@
 // 64th input is also loaded as-is (checksum/truncation paths).
 #include <cstring>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "fuzz/fuzz_util.hpp"
 #include "tsdf/map_io.hpp"
 

@@ -1,7 +1,7 @@
 // PLY reader (binary little endian and ASCII): parse_ply.
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "fuzz/fuzz_util.hpp"
-#include "io/ply_io.hpp"
+#include "semap/io/ply_io.hpp"
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   semap::TriangleMesh mesh;

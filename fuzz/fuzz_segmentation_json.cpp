@@ -3,7 +3,7 @@
 // with fixed small label and instance images.
 #include <opencv2/core.hpp>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "fuzz/fuzz_util.hpp"
 #include "io/image_io.hpp"
 #include "segmentation/groundtruth_segmenter.hpp"

@@ -1,6 +1,6 @@
 // TUM-style list files (rgb.txt, depth.txt, label.txt, 7-Scenes associations) and 3x4/4x4
 // pose matrix files: io_detail::read_list and read_matrix_pose.
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "fuzz/fuzz_util.hpp"
 #include "io/dataset_layouts.hpp"
 

@@ -1,7 +1,7 @@
 // TUM trajectory text: parse_tum_trajectory (groundtruth.txt, `semap eval ate` inputs).
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "fuzz/fuzz_util.hpp"
-#include "io/trajectory_io.hpp"
+#include "semap/io/trajectory_io.hpp"
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   semap::Trajectory t;

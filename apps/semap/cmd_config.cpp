@@ -1,7 +1,7 @@
 #include <cstdio>
 
 #include "apps/semap/commands.hpp"
-#include "pipeline/semap_config.hpp"
+#include "semap/pipeline/semap_config.hpp"
 
 namespace semap::app {
 

@@ -2,7 +2,7 @@
 #include <cstdio>
 
 #include "apps/semap/commands.hpp"
-#include "pipeline/run_pipeline.hpp"
+#include "semap/pipeline/run_pipeline.hpp"
 #include "pipeline/report.hpp"
 #include "synth/synth_config.hpp"
 

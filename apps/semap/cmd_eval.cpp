@@ -8,11 +8,11 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/semap/commands.hpp"
-#include "core/error.hpp"
-#include "eval/object_metrics.hpp"
-#include "eval/semantic_metrics.hpp"
-#include "eval/trajectory_metrics.hpp"
-#include "io/trajectory_io.hpp"
+#include "semap/core/error.hpp"
+#include "semap/eval/object_metrics.hpp"
+#include "semap/eval/semantic_metrics.hpp"
+#include "semap/eval/trajectory_metrics.hpp"
+#include "semap/io/trajectory_io.hpp"
 
 namespace semap::app {
 

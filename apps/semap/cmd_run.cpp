@@ -2,7 +2,7 @@
 
 #include "apps/semap/commands.hpp"
 #include "pipeline/report.hpp"
-#include "pipeline/run_pipeline.hpp"
+#include "semap/pipeline/run_pipeline.hpp"
 
 namespace semap::app {
 

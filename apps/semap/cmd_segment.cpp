@@ -5,11 +5,11 @@
 #include <memory>
 
 #include "apps/semap/commands.hpp"
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "io/image_io.hpp"
-#include "pipeline/semap_config.hpp"
+#include "semap/pipeline/semap_config.hpp"
 #include "segmentation/segmentation_io.hpp"
-#include "segmentation/segmenter_factory.hpp"
+#include "semap/segmentation/segmenter_factory.hpp"
 
 namespace semap::app {
 

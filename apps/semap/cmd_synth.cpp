@@ -3,8 +3,8 @@
 #include <memory>
 
 #include "apps/semap/commands.hpp"
-#include "core/error.hpp"
-#include "io/config_loader.hpp"
+#include "semap/core/error.hpp"
+#include "semap/io/config_loader.hpp"
 #include "synth/synth_config.hpp"
 
 namespace semap::app {

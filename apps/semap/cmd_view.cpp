@@ -12,8 +12,8 @@
 #include <thread>
 
 #include "apps/semap/commands.hpp"
-#include "core/error.hpp"
-#include "core/labels.hpp"
+#include "semap/core/error.hpp"
+#include "semap/core/labels.hpp"
 #include "core/paths.hpp"
 
 #ifdef SEMAP_HAVE_VIEWER_ASSETS

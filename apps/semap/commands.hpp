@@ -7,7 +7,7 @@
 #include <map>
 #include <string>
 
-#include "core/params.hpp"
+#include "semap/core/params.hpp"
 
 namespace semap::app {
 

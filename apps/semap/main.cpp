@@ -6,7 +6,7 @@
 #include <exception>
 
 #include "apps/semap/commands.hpp"
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"semap: semantic mapping from RGB-D sequences (trajectory, semantic TSDF mesh, object map)"};

@@ -1,4 +1,4 @@
-#include "core/camera.hpp"
+#include "semap/core/camera.hpp"
 
 namespace semap {
 

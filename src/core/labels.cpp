@@ -1,4 +1,4 @@
-#include "core/labels.hpp"
+#include "semap/core/labels.hpp"
 
 #include <string>
 

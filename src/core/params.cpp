@@ -1,10 +1,10 @@
-#include "core/params.hpp"
+#include "semap/core/params.hpp"
 
 #include <fmt/format.h>
 
 #include <algorithm>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 
 namespace semap {
 namespace {

@@ -3,7 +3,7 @@
 #include <cstdlib>
 #include <fstream>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 
 namespace semap {
 

@@ -1,4 +1,4 @@
-#include "core/point_cloud.hpp"
+#include "semap/core/point_cloud.hpp"
 
 namespace semap {
 

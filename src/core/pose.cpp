@@ -1,4 +1,4 @@
-#include "core/pose.hpp"
+#include "semap/core/pose.hpp"
 
 #include <cmath>
 

@@ -1,4 +1,4 @@
-#include "eval/object_metrics.hpp"
+#include "semap/eval/object_metrics.hpp"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -8,8 +8,8 @@
 #include <sstream>
 #include <string>
 
-#include "core/error.hpp"
-#include "io/ply_io.hpp"
+#include "semap/core/error.hpp"
+#include "semap/io/ply_io.hpp"
 
 namespace semap {
 namespace {

@@ -1,13 +1,13 @@
-#include "eval/semantic_metrics.hpp"
+#include "semap/eval/semantic_metrics.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <string>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "core/statistics.hpp"
 #include "eval/nearest_neighbors.hpp"
-#include "io/ply_io.hpp"
+#include "semap/io/ply_io.hpp"
 
 namespace semap {
 namespace {

@@ -1,4 +1,4 @@
-#include "eval/trajectory_metrics.hpp"
+#include "semap/eval/trajectory_metrics.hpp"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -6,7 +6,7 @@
 #include <numeric>
 #include <string>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "core/statistics.hpp"
 #include "io/association.hpp"
 

@@ -1,4 +1,4 @@
-#include "io/config_loader.hpp"
+#include "semap/io/config_loader.hpp"
 
 #include <yaml-cpp/yaml.h>
 
@@ -8,7 +8,7 @@
 #include <set>
 #include <sstream>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 
 namespace semap {
 namespace {

@@ -1,11 +1,11 @@
-#include "io/dataset.hpp"
+#include "semap/io/dataset.hpp"
 
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <cctype>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "io/dataset_layouts.hpp"
 #include "io/image_io.hpp"
 #include "io/rosbag_backend.hpp"

@@ -2,7 +2,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "io/association.hpp"
 #include "io/dataset_layouts.hpp"
 #include "io/text_util.hpp"

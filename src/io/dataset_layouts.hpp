@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "io/dataset.hpp"
+#include "semap/io/dataset.hpp"
 
 namespace semap::io_detail {
 

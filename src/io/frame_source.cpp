@@ -1,8 +1,8 @@
-#include "io/frame_source.hpp"
+#include "semap/io/frame_source.hpp"
 
 #include <atomic>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "io/openni2_source.hpp"
 
 namespace semap {

@@ -4,7 +4,7 @@
 // recording plays as fast as the consumer reads, without losing frames (the callback waits).
 #include "io/openni2_source.hpp"
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 
 #ifdef SEMAP_WITH_OPENNI2
 

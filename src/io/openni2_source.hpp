@@ -4,7 +4,7 @@
 #include <memory>
 #include <string>
 
-#include "io/frame_source.hpp"
+#include "semap/io/frame_source.hpp"
 
 namespace semap::io_detail {
 

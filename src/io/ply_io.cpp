@@ -1,4 +1,4 @@
-#include "io/ply_io.hpp"
+#include "semap/io/ply_io.hpp"
 
 #include <algorithm>
 #include <bit>
@@ -11,7 +11,7 @@
 #include <string_view>
 #include <vector>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "core/paths.hpp"
 #include "io/text_util.hpp"
 

@@ -1,7 +1,7 @@
 // ROS1 bag access (see rosbag_backend.hpp). Built as C++17 (src/io/CMakeLists.txt).
 #include "io/rosbag_backend.hpp"
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 
 #ifdef SEMAP_WITH_ROSBAG
 

@@ -12,12 +12,12 @@
 #include <optional>
 #include <opencv2/imgproc.hpp>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "io/association.hpp"
 #include "io/dataset_layouts.hpp"
 #include "io/image_io.hpp"
 #include "io/rosbag_backend.hpp"
-#include "io/trajectory_io.hpp"
+#include "semap/io/trajectory_io.hpp"
 
 namespace semap::io_detail {
 

@@ -15,7 +15,7 @@
 #include <fstream>
 #include <opencv2/imgproc.hpp>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "io/dataset_layouts.hpp"
 #include "io/image_io.hpp"
 #include "io/text_util.hpp"

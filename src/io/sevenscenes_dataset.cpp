@@ -6,10 +6,10 @@
 #include <algorithm>
 #include <cmath>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "io/dataset_layouts.hpp"
 #include "io/text_util.hpp"
-#include "io/trajectory_io.hpp"
+#include "semap/io/trajectory_io.hpp"
 
 namespace semap::io_detail {
 

@@ -1,9 +1,9 @@
 // The synthetic layout written by src/synth (SHARED_FORMATS.md): TUM lists for rgb, depth,
 // label and instance images with identical timestamps, camera from dataset.yaml.
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "io/association.hpp"
 #include "io/dataset_layouts.hpp"
-#include "io/trajectory_io.hpp"
+#include "semap/io/trajectory_io.hpp"
 
 namespace semap::io_detail {
 

@@ -1,9 +1,9 @@
-#include "io/trajectory_io.hpp"
+#include "semap/io/trajectory_io.hpp"
 
 #include <cmath>
 #include <cstdio>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "core/paths.hpp"
 #include "io/text_util.hpp"
 

@@ -8,7 +8,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "io/dataset_layouts.hpp"
 #include "io/text_util.hpp"
 

@@ -6,7 +6,7 @@
 #include <map>
 #include <numeric>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "core/statistics.hpp"
 #include "objects/segment_graph.hpp"
 #include "objects/supervoxel_graph.hpp"

@@ -4,11 +4,11 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "core/camera.hpp"
-#include "core/frame.hpp"
-#include "core/labels.hpp"
-#include "objects/objects_config.hpp"
-#include "segmentation/segmenter.hpp"
+#include "semap/core/camera.hpp"
+#include "semap/core/frame.hpp"
+#include "semap/core/labels.hpp"
+#include "semap/objects/objects_config.hpp"
+#include "semap/segmentation/segmenter.hpp"
 
 namespace semap {
 

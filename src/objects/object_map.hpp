@@ -10,9 +10,9 @@
 #include <utility>
 #include <vector>
 
-#include "core/labels.hpp"
+#include "semap/core/labels.hpp"
 #include "objects/frame_segmenter.hpp"
-#include "objects/objects_config.hpp"
+#include "semap/objects/objects_config.hpp"
 
 namespace semap {
 

@@ -4,7 +4,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "core/labels.hpp"
+#include "semap/core/labels.hpp"
 #include "objects/segment_graph.hpp"
 
 namespace semap {

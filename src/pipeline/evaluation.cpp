@@ -1,9 +1,9 @@
-#include "pipeline/evaluation.hpp"
+#include "semap/pipeline/evaluation.hpp"
 
 #include <spdlog/spdlog.h>
 
-#include "core/error.hpp"
-#include "io/ply_io.hpp"
+#include "semap/core/error.hpp"
+#include "semap/io/ply_io.hpp"
 
 namespace semap {
 namespace {

@@ -1,4 +1,4 @@
-#include "pipeline/mapper.hpp"
+#include "semap/mapper.hpp"
 
 #include <spdlog/spdlog.h>
 
@@ -6,13 +6,13 @@
 #include <condition_variable>
 #include <mutex>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "objects/object_mapper.hpp"
 #include "pipeline/map_refresh.hpp"
 #include "pipeline/refresh_archive.hpp"
 #include "pipeline/stage.hpp"
 #include "segmentation/groundtruth_segmenter.hpp"
-#include "segmentation/segmenter_factory.hpp"
+#include "semap/segmentation/segmenter_factory.hpp"
 #include "segmentation/temporal_filter.hpp"
 #include "tracking/depth_repair.hpp"
 #include "tracking/tracker.hpp"

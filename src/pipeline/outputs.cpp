@@ -1,9 +1,9 @@
-#include "pipeline/outputs.hpp"
+#include "semap/pipeline/outputs.hpp"
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "core/paths.hpp"
-#include "io/ply_io.hpp"
-#include "io/trajectory_io.hpp"
+#include "semap/io/ply_io.hpp"
+#include "semap/io/trajectory_io.hpp"
 
 namespace semap {
 

@@ -6,7 +6,7 @@
 #include <memory>
 #include <opencv2/imgcodecs.hpp>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 
 namespace semap {
 

@@ -5,7 +5,7 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
-#include "core/labels.hpp"
+#include "semap/core/labels.hpp"
 #include "core/paths.hpp"
 
 namespace semap {

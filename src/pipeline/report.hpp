@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "core/point_cloud.hpp"
-#include "core/pose.hpp"
-#include "pipeline/stage_timer.hpp"
+#include "semap/core/point_cloud.hpp"
+#include "semap/core/pose.hpp"
+#include "semap/pipeline/stage_timer.hpp"
 
 namespace semap {
 

@@ -1,4 +1,4 @@
-#include "pipeline/run_pipeline.hpp"
+#include "semap/pipeline/run_pipeline.hpp"
 
 #include <spdlog/spdlog.h>
 #include <tbb/global_control.h>
@@ -6,14 +6,14 @@
 #include <opencv2/imgcodecs.hpp>
 #include <thread>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "core/paths.hpp"
 #include "core/progress.hpp"
-#include "io/dataset.hpp"
+#include "semap/io/dataset.hpp"
 #include "pipeline/bounded_queue.hpp"
 #include "pipeline/report.hpp"
 #include "pipeline/simulated_segmenter.hpp"
-#include "segmentation/segmenter_factory.hpp"
+#include "semap/segmentation/segmenter_factory.hpp"
 
 namespace semap {
 namespace {

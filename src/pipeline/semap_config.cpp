@@ -1,6 +1,6 @@
-#include "pipeline/semap_config.hpp"
+#include "semap/pipeline/semap_config.hpp"
 
-#include "io/config_loader.hpp"
+#include "semap/io/config_loader.hpp"
 
 namespace semap {
 

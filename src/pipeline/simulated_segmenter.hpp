@@ -4,8 +4,8 @@
 // segmented like ground truth. Lets the whole pipeline run without a network.
 #include <memory>
 
-#include "segmentation/segmenter.hpp"
-#include "synth/segmentation_noise.hpp"
+#include "semap/segmentation/segmenter.hpp"
+#include "semap/synth/segmentation_noise.hpp"
 
 namespace semap {
 

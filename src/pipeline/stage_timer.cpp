@@ -1,4 +1,4 @@
-#include "pipeline/stage_timer.hpp"
+#include "semap/pipeline/stage_timer.hpp"
 
 #include <sys/resource.h>
 

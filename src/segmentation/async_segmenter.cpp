@@ -1,6 +1,6 @@
 #include "segmentation/async_segmenter.hpp"
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 
 namespace semap {
 

@@ -15,8 +15,8 @@
 #include <optional>
 #include <thread>
 
-#include "segmentation/segmentation_config.hpp"
-#include "segmentation/segmenter.hpp"
+#include "semap/segmentation/segmentation_config.hpp"
+#include "semap/segmentation/segmenter.hpp"
 
 namespace semap {
 

@@ -7,8 +7,8 @@
 #include <fstream>
 #include <unordered_map>
 
-#include "core/error.hpp"
-#include "segmentation/segmentation_config.hpp"
+#include "semap/core/error.hpp"
+#include "semap/segmentation/segmentation_config.hpp"
 
 namespace semap {
 namespace {

@@ -6,7 +6,7 @@
 #include <string_view>
 #include <vector>
 
-#include "core/labels.hpp"
+#include "semap/core/labels.hpp"
 
 namespace semap {
 

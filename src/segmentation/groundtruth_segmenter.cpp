@@ -5,7 +5,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "io/image_io.hpp"
 #include "segmentation/class_mapping.hpp"
 #include "segmentation/segmentation_utils.hpp"

@@ -7,8 +7,8 @@
 //   It reads exactly what `semap segment` writes (segmentation_io.hpp documents the JSON).
 #include <filesystem>
 
-#include "segmentation/segmentation_config.hpp"
-#include "segmentation/segmenter.hpp"
+#include "semap/segmentation/segmentation_config.hpp"
+#include "semap/segmentation/segmenter.hpp"
 
 namespace semap {
 

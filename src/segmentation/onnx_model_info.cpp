@@ -4,7 +4,7 @@
 #include <iterator>
 #include <set>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 
 namespace semap {
 namespace {

@@ -3,8 +3,8 @@
 // (labels, masks, colour) resampled at depth-camera pixels.
 #include <opencv2/core.hpp>
 
-#include "core/camera.hpp"
-#include "segmentation/segmenter.hpp"
+#include "semap/core/camera.hpp"
+#include "semap/segmentation/segmenter.hpp"
 
 namespace semap {
 

@@ -14,7 +14,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "segmentation/segmenter.hpp"
+#include "semap/segmentation/segmenter.hpp"
 
 namespace semap {
 

@@ -2,7 +2,7 @@
 // Helpers shared by the segmenters: letterboxing, painting instances into label images.
 #include <opencv2/core.hpp>
 
-#include "segmentation/segmenter.hpp"
+#include "semap/segmentation/segmenter.hpp"
 
 namespace semap {
 

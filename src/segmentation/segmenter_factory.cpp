@@ -1,6 +1,6 @@
-#include "segmentation/segmenter_factory.hpp"
+#include "semap/segmentation/segmenter_factory.hpp"
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "segmentation/groundtruth_segmenter.hpp"
 #include "segmentation/onnx_model_info.hpp"
 #include "segmentation/registration.hpp"

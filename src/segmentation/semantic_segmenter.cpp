@@ -5,7 +5,7 @@
 #include <cstring>
 #include <opencv2/imgproc.hpp>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "segmentation/onnx_model_info.hpp"
 
 namespace semap {

@@ -6,8 +6,8 @@
 #include <opencv2/dnn.hpp>
 
 #include "segmentation/class_mapping.hpp"
-#include "segmentation/segmentation_config.hpp"
-#include "segmentation/segmenter.hpp"
+#include "semap/segmentation/segmentation_config.hpp"
+#include "semap/segmentation/segmenter.hpp"
 
 namespace semap {
 

@@ -16,10 +16,10 @@
 #include <deque>
 #include <opencv2/core.hpp>
 
-#include "core/camera.hpp"
-#include "core/pose.hpp"
-#include "segmentation/segmentation_config.hpp"
-#include "segmentation/segmenter.hpp"
+#include "semap/core/camera.hpp"
+#include "semap/core/pose.hpp"
+#include "semap/segmentation/segmentation_config.hpp"
+#include "semap/segmentation/segmenter.hpp"
 
 namespace semap {
 

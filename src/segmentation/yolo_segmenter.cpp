@@ -7,7 +7,7 @@
 #include <numeric>
 #include <opencv2/imgproc.hpp>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "segmentation/onnx_model_info.hpp"
 
 namespace semap {

@@ -6,12 +6,12 @@
 #include <filesystem>
 #include <opencv2/dnn.hpp>
 
-#include "core/camera.hpp"
+#include "semap/core/camera.hpp"
 #include "segmentation/class_mapping.hpp"
 #include "segmentation/nms.hpp"
-#include "segmentation/segmentation_config.hpp"
+#include "semap/segmentation/segmentation_config.hpp"
 #include "segmentation/segmentation_utils.hpp"
-#include "segmentation/segmenter.hpp"
+#include "semap/segmentation/segmenter.hpp"
 
 namespace semap {
 

@@ -10,18 +10,18 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "core/paths.hpp"
 #include "core/progress.hpp"
 #include "io/image_io.hpp"
-#include "io/ply_io.hpp"
-#include "io/trajectory_io.hpp"
+#include "semap/io/ply_io.hpp"
+#include "semap/io/trajectory_io.hpp"
 #include "synth/depth_noise.hpp"
 #include "synth/gt_points.hpp"
 #include "synth/random.hpp"
 #include "synth/renderer.hpp"
 #include "synth/scene.hpp"
-#include "synth/segmentation_noise.hpp"
+#include "semap/synth/segmentation_noise.hpp"
 #include "synth/synth_config.hpp"
 #include "synth/trajectory.hpp"
 

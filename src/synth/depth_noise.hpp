@@ -9,7 +9,7 @@
 #include <cstdint>
 #include <opencv2/core.hpp>
 
-#include "core/params.hpp"
+#include "semap/core/params.hpp"
 
 namespace semap {
 

@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "synth/renderer.hpp"
 
 namespace semap {

@@ -7,9 +7,9 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
-#include "core/camera.hpp"
-#include "core/point_cloud.hpp"
-#include "core/pose.hpp"
+#include "semap/core/camera.hpp"
+#include "semap/core/point_cloud.hpp"
+#include "semap/core/pose.hpp"
 #include "synth/scene.hpp"
 
 namespace semap {

@@ -8,7 +8,7 @@
 #include <limits>
 #include <numeric>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 
 namespace semap {
 namespace {

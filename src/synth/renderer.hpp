@@ -9,9 +9,9 @@
 #include <optional>
 #include <vector>
 
-#include "core/camera.hpp"
-#include "core/labels.hpp"
-#include "core/pose.hpp"
+#include "semap/core/camera.hpp"
+#include "semap/core/labels.hpp"
+#include "semap/core/pose.hpp"
 #include "synth/scene.hpp"
 
 namespace semap {

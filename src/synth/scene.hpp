@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "core/labels.hpp"
+#include "semap/core/labels.hpp"
 
 namespace semap {
 

@@ -1,4 +1,4 @@
-#include "synth/segmentation_noise.hpp"
+#include "semap/synth/segmentation_noise.hpp"
 
 #include <opencv2/imgproc.hpp>
 
@@ -6,8 +6,8 @@
 #include <numeric>
 #include <vector>
 
-#include "core/error.hpp"
-#include "core/labels.hpp"
+#include "semap/core/error.hpp"
+#include "semap/core/labels.hpp"
 #include "synth/random.hpp"
 
 namespace semap {

@@ -4,9 +4,9 @@
 #include <cstdint>
 #include <filesystem>
 
-#include "core/params.hpp"
+#include "semap/core/params.hpp"
 #include "synth/depth_noise.hpp"
-#include "synth/segmentation_noise.hpp"
+#include "semap/synth/segmentation_noise.hpp"
 
 namespace semap {
 

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 
 namespace semap {
 

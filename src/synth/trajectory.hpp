@@ -5,7 +5,7 @@
 // is one step before the first and the start view is revisited (loop-closure tests).
 #include <Eigen/Core>
 
-#include "core/pose.hpp"
+#include "semap/core/pose.hpp"
 
 namespace semap {
 

@@ -6,7 +6,7 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "tracking/parallel.hpp"
 
 namespace semap {

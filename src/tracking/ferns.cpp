@@ -3,7 +3,7 @@
 #include <opencv2/imgproc.hpp>
 #include <random>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 
 namespace semap {
 

@@ -3,7 +3,7 @@
 #include <map>
 #include <vector>
 
-#include "core/pose.hpp"
+#include "semap/core/pose.hpp"
 #include "tracking/registration.hpp"
 
 namespace semap {

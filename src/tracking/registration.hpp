@@ -8,8 +8,8 @@
 #include <opencv2/features2d.hpp>
 #include <vector>
 
-#include "core/camera.hpp"
-#include "core/pose.hpp"
+#include "semap/core/camera.hpp"
+#include "semap/core/pose.hpp"
 
 namespace semap {
 

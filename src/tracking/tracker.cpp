@@ -14,7 +14,7 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "tracking/depth_repair.hpp"
 #include "tracking/ferns.hpp"
 #include "tracking/parallel.hpp"

@@ -9,10 +9,10 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
-#include "core/camera.hpp"
-#include "core/frame.hpp"
-#include "core/pose.hpp"
-#include "tracking/tracking_config.hpp"
+#include "semap/core/camera.hpp"
+#include "semap/core/frame.hpp"
+#include "semap/core/pose.hpp"
+#include "semap/tracking/tracking_config.hpp"
 
 namespace semap {
 

@@ -7,7 +7,7 @@
 
 #include <cmath>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 
 namespace semap {
 namespace {

@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "core/camera.hpp"
-#include "core/pose.hpp"
-#include "tsdf/tsdf_map.hpp"
+#include "semap/core/camera.hpp"
+#include "semap/core/pose.hpp"
+#include "semap/tsdf/tsdf_map.hpp"
 
 namespace semap {
 

@@ -4,7 +4,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "core/paths.hpp"
 
 namespace semap {

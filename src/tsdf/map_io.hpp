@@ -10,7 +10,7 @@
 // semap::Error naming the file.
 #include <filesystem>
 
-#include "tsdf/tsdf_map.hpp"
+#include "semap/tsdf/tsdf_map.hpp"
 
 namespace semap {
 

@@ -7,8 +7,8 @@
 // Bayesian argmax when that layer is on, else the compact label byte.
 #include <unordered_map>
 
-#include "core/point_cloud.hpp"
-#include "tsdf/tsdf_map.hpp"
+#include "semap/core/point_cloud.hpp"
+#include "semap/tsdf/tsdf_map.hpp"
 
 namespace semap {
 

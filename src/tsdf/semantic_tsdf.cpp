@@ -1,6 +1,6 @@
 #include "tsdf/semantic_tsdf.hpp"
 
-#include "io/ply_io.hpp"
+#include "semap/io/ply_io.hpp"
 #include "tsdf/map_io.hpp"
 
 namespace semap {

@@ -10,7 +10,7 @@
 #include <filesystem>
 #include <memory>
 
-#include "core/frame.hpp"
+#include "semap/core/frame.hpp"
 #include "tsdf/integrator.hpp"
 #include "tsdf/mesh_extractor.hpp"
 

@@ -1,4 +1,4 @@
-#include "tsdf/tsdf_map.hpp"
+#include "semap/tsdf/tsdf_map.hpp"
 
 #include <algorithm>
 #include <cstring>

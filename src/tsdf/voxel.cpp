@@ -1,4 +1,4 @@
-#include "tsdf/voxel.hpp"
+#include "semap/tsdf/voxel.hpp"
 
 namespace semap {
 

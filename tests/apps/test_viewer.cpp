@@ -21,9 +21,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include "core/labels.hpp"
-#include "core/point_cloud.hpp"
-#include "io/ply_io.hpp"
+#include "semap/core/labels.hpp"
+#include "semap/core/point_cloud.hpp"
+#include "semap/io/ply_io.hpp"
 #include "test_support.hpp"
 
 namespace semap::test {

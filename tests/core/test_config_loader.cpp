@@ -1,8 +1,8 @@
 #include <gtest/gtest.h>
 
-#include "core/error.hpp"
-#include "io/config_loader.hpp"
-#include "pipeline/semap_config.hpp"
+#include "semap/core/error.hpp"
+#include "semap/io/config_loader.hpp"
+#include "semap/pipeline/semap_config.hpp"
 
 namespace semap {
 namespace {

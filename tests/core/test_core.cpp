@@ -2,10 +2,10 @@
 
 #include <cmath>
 
-#include "core/camera.hpp"
-#include "core/labels.hpp"
-#include "core/point_cloud.hpp"
-#include "core/pose.hpp"
+#include "semap/core/camera.hpp"
+#include "semap/core/labels.hpp"
+#include "semap/core/point_cloud.hpp"
+#include "semap/core/pose.hpp"
 
 namespace semap {
 

@@ -3,9 +3,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/pose.hpp"
-#include "io/ply_io.hpp"
-#include "io/trajectory_io.hpp"
+#include "semap/core/pose.hpp"
+#include "semap/io/ply_io.hpp"
+#include "semap/io/trajectory_io.hpp"
 #include "eval/cli_json.hpp"
 #include "test_support.hpp"
 

@@ -4,8 +4,8 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
-#include "eval/object_metrics.hpp"
-#include "io/ply_io.hpp"
+#include "semap/eval/object_metrics.hpp"
+#include "semap/io/ply_io.hpp"
 #include "eval/cli_json.hpp"
 #include "test_support.hpp"
 

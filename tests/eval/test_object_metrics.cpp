@@ -5,9 +5,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/error.hpp"
-#include "eval/object_metrics.hpp"
-#include "io/ply_io.hpp"
+#include "semap/core/error.hpp"
+#include "semap/eval/object_metrics.hpp"
+#include "semap/io/ply_io.hpp"
 #include "test_support.hpp"
 
 namespace semap {

@@ -1,9 +1,9 @@
 // Semantic mIoU / surface error / completeness on synthetic labelled point sets.
 #include <gtest/gtest.h>
 
-#include "core/error.hpp"
-#include "eval/semantic_metrics.hpp"
-#include "io/ply_io.hpp"
+#include "semap/core/error.hpp"
+#include "semap/eval/semantic_metrics.hpp"
+#include "semap/io/ply_io.hpp"
 #include "test_support.hpp"
 
 namespace semap {

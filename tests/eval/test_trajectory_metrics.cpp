@@ -4,8 +4,8 @@
 #include <cmath>
 #include <random>
 
-#include "core/error.hpp"
-#include "eval/trajectory_metrics.hpp"
+#include "semap/core/error.hpp"
+#include "semap/eval/trajectory_metrics.hpp"
 
 namespace semap {
 namespace {

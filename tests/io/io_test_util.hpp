@@ -5,7 +5,7 @@
 #include <fstream>
 #include <string>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 
 namespace semap::test {
 

@@ -4,9 +4,9 @@
 #include <cmath>
 #include <thread>
 
-#include "io/dataset.hpp"
+#include "semap/io/dataset.hpp"
 #include "io/image_io.hpp"
-#include "io/trajectory_io.hpp"
+#include "semap/io/trajectory_io.hpp"
 #include "io_test_util.hpp"
 #include "test_support.hpp"
 

@@ -2,7 +2,7 @@
 // stop from another thread, and an unreadable frame that is reported and stepped over.
 #include <thread>
 
-#include "io/frame_source.hpp"
+#include "semap/io/frame_source.hpp"
 #include "io/image_io.hpp"
 #include "io_test_util.hpp"
 #include "test_support.hpp"

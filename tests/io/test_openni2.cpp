@@ -7,7 +7,7 @@
 #include <chrono>
 #include <thread>
 
-#include "io/frame_source.hpp"
+#include "semap/io/frame_source.hpp"
 #include "io_test_util.hpp"
 #include "test_support.hpp"
 

@@ -1,6 +1,6 @@
 #include <random>
 
-#include "io/ply_io.hpp"
+#include "semap/io/ply_io.hpp"
 #include "io_test_util.hpp"
 #include "test_support.hpp"
 

@@ -9,8 +9,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "eval/trajectory_metrics.hpp"
-#include "io/dataset.hpp"
+#include "semap/eval/trajectory_metrics.hpp"
+#include "semap/io/dataset.hpp"
 #include "io/image_io.hpp"
 #include "io_test_util.hpp"
 #include "test_rosbag_writer.hpp"

@@ -12,7 +12,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "io/dataset.hpp"
+#include "semap/io/dataset.hpp"
 #include "io/image_io.hpp"
 #include "io_test_util.hpp"
 #include "segmentation/registration.hpp"

@@ -2,7 +2,7 @@
 #include <random>
 
 #include "io/association.hpp"
-#include "io/trajectory_io.hpp"
+#include "semap/io/trajectory_io.hpp"
 #include "io_test_util.hpp"
 #include "test_support.hpp"
 

@@ -14,11 +14,11 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "core/labels.hpp"
-#include "io/dataset.hpp"
-#include "io/ply_io.hpp"
+#include "semap/core/labels.hpp"
+#include "semap/io/dataset.hpp"
+#include "semap/io/ply_io.hpp"
 #include "objects/object_mapper.hpp"
-#include "synth/segmentation_noise.hpp"
+#include "semap/synth/segmentation_noise.hpp"
 #include "synth/synth_config.hpp"
 
 namespace semap::test {

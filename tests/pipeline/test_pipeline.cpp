@@ -8,9 +8,9 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "core/progress.hpp"
-#include "pipeline/run_pipeline.hpp"
+#include "semap/pipeline/run_pipeline.hpp"
 #include "synth/synth_config.hpp"
 #include "test_support.hpp"
 

@@ -7,10 +7,10 @@
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
-#include "core/labels.hpp"
+#include "semap/core/labels.hpp"
 #include "core/progress.hpp"
-#include "io/ply_io.hpp"
-#include "pipeline/run_pipeline.hpp"
+#include "semap/io/ply_io.hpp"
+#include "semap/pipeline/run_pipeline.hpp"
 #include "test_support.hpp"
 
 namespace semap {

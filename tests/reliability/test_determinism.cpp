@@ -6,7 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/progress.hpp"
-#include "pipeline/run_pipeline.hpp"
+#include "semap/pipeline/run_pipeline.hpp"
 #include "synth/synth_config.hpp"
 #include "test_support.hpp"
 

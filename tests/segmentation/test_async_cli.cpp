@@ -8,7 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <thread>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "segmentation/async_segmenter.hpp"
 #include "test_support.hpp"
 

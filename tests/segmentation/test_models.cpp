@@ -7,8 +7,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "core/error.hpp"
-#include "segmentation/segmenter_factory.hpp"
+#include "semap/core/error.hpp"
+#include "semap/segmentation/segmenter_factory.hpp"
 #include "segmentation/semantic_segmenter.hpp"
 #include "segmentation/yolo_segmenter.hpp"
 #include "test_support.hpp"

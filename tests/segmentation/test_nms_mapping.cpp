@@ -5,13 +5,13 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "segmentation/class_mapping.hpp"
 #include "segmentation/groundtruth_segmenter.hpp"
 #include "segmentation/nms.hpp"
 #include "segmentation/nms_evaluation.hpp"
 #include "segmentation/onnx_model_info.hpp"
-#include "segmentation/segmentation_config.hpp"
+#include "semap/segmentation/segmentation_config.hpp"
 #include "segmentation/segmentation_io.hpp"
 #include "test_support.hpp"
 
@@ -180,8 +180,8 @@ TEST(PrecomputedSegmenter, RoundTripOfWrittenFilesAndExternalJson) {
 }  // namespace
 }  // namespace semap
 
-#include "io/dataset.hpp"
-#include "segmentation/segmenter_factory.hpp"
+#include "semap/io/dataset.hpp"
+#include "semap/segmentation/segmenter_factory.hpp"
 
 namespace semap {
 namespace {

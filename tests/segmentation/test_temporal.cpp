@@ -9,7 +9,7 @@
 #include "segmentation/temporal_filter.hpp"
 #include "synth/renderer.hpp"
 #include "synth/scene.hpp"
-#include "synth/segmentation_noise.hpp"
+#include "semap/synth/segmentation_noise.hpp"
 #include "synth/trajectory.hpp"
 
 namespace semap {

@@ -7,12 +7,12 @@
 #include <set>
 #include <sstream>
 
-#include "core/labels.hpp"
+#include "semap/core/labels.hpp"
 #include "core/progress.hpp"
-#include "io/dataset.hpp"
+#include "semap/io/dataset.hpp"
 #include "io/image_io.hpp"
-#include "io/ply_io.hpp"
-#include "io/trajectory_io.hpp"
+#include "semap/io/ply_io.hpp"
+#include "semap/io/trajectory_io.hpp"
 #include "synth/synth_config.hpp"
 #include "test_support.hpp"
 

@@ -5,9 +5,9 @@
 #include <cmath>
 #include <set>
 
-#include "core/labels.hpp"
+#include "semap/core/labels.hpp"
 #include "synth/depth_noise.hpp"
-#include "synth/segmentation_noise.hpp"
+#include "semap/synth/segmentation_noise.hpp"
 
 namespace semap {
 namespace {

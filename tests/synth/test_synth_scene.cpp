@@ -5,7 +5,7 @@
 #include <map>
 #include <set>
 
-#include "core/labels.hpp"
+#include "semap/core/labels.hpp"
 #include "synth/renderer.hpp"
 #include "synth/scene.hpp"
 #include "synth/trajectory.hpp"

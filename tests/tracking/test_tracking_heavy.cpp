@@ -7,7 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "bench/open3d_odometry.hpp"
-#include "eval/trajectory_metrics.hpp"
+#include "semap/eval/trajectory_metrics.hpp"
 
 #include "synth/synth_config.hpp"
 #include "test_support.hpp"

@@ -7,7 +7,7 @@
 #include <opencv2/imgproc.hpp>
 #include <iostream>
 
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "tracking/depth_repair.hpp"
 #include "tracking/ferns.hpp"
 #include "tracking/pose_graph.hpp"

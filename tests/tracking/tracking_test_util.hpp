@@ -3,8 +3,8 @@
 #include <filesystem>
 #include <iostream>
 
-#include "eval/trajectory_metrics.hpp"
-#include "io/dataset.hpp"
+#include "semap/eval/trajectory_metrics.hpp"
+#include "semap/io/dataset.hpp"
 #include "tracking/tracker.hpp"
 
 namespace semap::test {

@@ -5,9 +5,9 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
-#include "core/camera.hpp"
-#include "core/labels.hpp"
-#include "core/pose.hpp"
+#include "semap/core/camera.hpp"
+#include "semap/core/labels.hpp"
+#include "semap/core/pose.hpp"
 
 namespace semap::test {
 

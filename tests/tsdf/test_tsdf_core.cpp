@@ -8,8 +8,8 @@
 #include <unordered_map>
 
 #include "tsdf/integrator.hpp"
-#include "tsdf/tsdf_map.hpp"
-#include "tsdf/voxel.hpp"
+#include "semap/tsdf/tsdf_map.hpp"
+#include "semap/tsdf/voxel.hpp"
 
 namespace semap {
 namespace {

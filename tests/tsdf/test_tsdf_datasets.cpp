@@ -7,9 +7,9 @@
 #include <chrono>
 #include <map>
 
-#include "eval/semantic_metrics.hpp"
-#include "io/dataset.hpp"
-#include "io/ply_io.hpp"
+#include "semap/eval/semantic_metrics.hpp"
+#include "semap/io/dataset.hpp"
+#include "semap/io/ply_io.hpp"
 #include "synth/synth_config.hpp"
 #include "test_support.hpp"
 #include "tsdf/semantic_tsdf.hpp"

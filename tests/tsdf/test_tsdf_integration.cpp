@@ -6,9 +6,9 @@
 #include <fstream>
 
 #include "analytic_scene.hpp"
-#include "core/error.hpp"
+#include "semap/core/error.hpp"
 #include "test_support.hpp"
-#include "io/ply_io.hpp"
+#include "semap/io/ply_io.hpp"
 #include "tsdf/map_io.hpp"
 #include "tsdf/semantic_tsdf.hpp"
 

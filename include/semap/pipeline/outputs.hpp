@@ -9,8 +9,8 @@
 #include <filesystem>
 #include <vector>
 
-#include "objects/object_mapper.hpp"
-#include "pipeline/mapper.hpp"
+#include "semap/objects/object_summary.hpp"
+#include "semap/mapper.hpp"
 
 namespace semap {
 

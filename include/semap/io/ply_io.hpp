@@ -5,7 +5,7 @@
 #include <filesystem>
 #include <string>
 
-#include "core/point_cloud.hpp"
+#include "semap/core/point_cloud.hpp"
 
 namespace semap {
 

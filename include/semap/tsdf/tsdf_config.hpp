@@ -2,7 +2,7 @@
 #include <algorithm>
 #include <string>
 
-#include "core/params.hpp"
+#include "semap/core/params.hpp"
 
 namespace semap {
 

@@ -21,8 +21,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/labels.hpp"
-#include "core/point_cloud.hpp"
+#include "semap/core/labels.hpp"
+#include "semap/core/point_cloud.hpp"
 
 namespace semap {
 

@@ -4,7 +4,7 @@
 #include <optional>
 #include <string>
 
-#include "core/pose.hpp"
+#include "semap/core/pose.hpp"
 
 namespace semap {
 

@@ -5,9 +5,9 @@
 #include <optional>
 #include <string>
 
-#include "core/camera.hpp"
-#include "core/frame.hpp"
-#include "io/dataset.hpp"
+#include "semap/core/camera.hpp"
+#include "semap/core/frame.hpp"
+#include "semap/io/dataset.hpp"
 
 namespace semap {
 

@@ -14,7 +14,7 @@
 #include <opencv2/core.hpp>
 #include <utility>
 
-#include "core/params.hpp"
+#include "semap/core/params.hpp"
 
 namespace semap {
 

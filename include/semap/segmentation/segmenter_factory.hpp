@@ -14,9 +14,9 @@
 #include <memory>
 #include <string>
 
-#include "core/camera.hpp"
-#include "segmentation/segmentation_config.hpp"
-#include "segmentation/segmenter.hpp"
+#include "semap/core/camera.hpp"
+#include "semap/segmentation/segmentation_config.hpp"
+#include "semap/segmentation/segmenter.hpp"
 
 namespace semap {
 

@@ -5,7 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/pose.hpp"
+#include "semap/core/pose.hpp"
 
 namespace semap {
 

@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "core/camera.hpp"
-#include "core/frame.hpp"
-#include "core/labels.hpp"
+#include "semap/core/camera.hpp"
+#include "semap/core/frame.hpp"
+#include "semap/core/labels.hpp"
 
 namespace semap {
 

@@ -1,5 +1,5 @@
 #pragma once
-#include "core/params.hpp"
+#include "semap/core/params.hpp"
 
 namespace semap {
 

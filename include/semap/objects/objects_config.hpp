@@ -1,7 +1,7 @@
 #pragma once
 #include <string>
 
-#include "core/params.hpp"
+#include "semap/core/params.hpp"
 
 namespace semap {
 

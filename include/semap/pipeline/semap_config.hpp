@@ -3,12 +3,12 @@
 #include <filesystem>
 #include <string>
 
-#include "core/params.hpp"
-#include "objects/objects_config.hpp"
-#include "segmentation/segmentation_config.hpp"
-#include "synth/segmentation_noise.hpp"
-#include "tracking/tracking_config.hpp"
-#include "tsdf/tsdf_config.hpp"
+#include "semap/core/params.hpp"
+#include "semap/objects/objects_config.hpp"
+#include "semap/segmentation/segmentation_config.hpp"
+#include "semap/synth/segmentation_noise.hpp"
+#include "semap/tracking/tracking_config.hpp"
+#include "semap/tsdf/tsdf_config.hpp"
 
 namespace semap {
 

@@ -5,7 +5,7 @@
 #include <functional>
 #include <string>
 
-#include "core/params.hpp"
+#include "semap/core/params.hpp"
 
 namespace semap {
 

@@ -7,8 +7,8 @@
 #include <memory>
 #include <vector>
 
-#include "tsdf/tsdf_config.hpp"
-#include "tsdf/voxel.hpp"
+#include "semap/tsdf/tsdf_config.hpp"
+#include "semap/tsdf/voxel.hpp"
 
 namespace semap {
 

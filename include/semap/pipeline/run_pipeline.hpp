@@ -6,10 +6,10 @@
 #include <map>
 #include <string>
 
-#include "core/params.hpp"
-#include "pipeline/evaluation.hpp"
-#include "pipeline/mapper.hpp"
-#include "pipeline/semap_config.hpp"
+#include "semap/core/params.hpp"
+#include "semap/pipeline/evaluation.hpp"
+#include "semap/mapper.hpp"
+#include "semap/pipeline/semap_config.hpp"
 
 namespace semap {
 

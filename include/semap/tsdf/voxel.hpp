@@ -7,7 +7,7 @@
 #include <cstring>
 #include <limits>
 
-#include "core/labels.hpp"
+#include "semap/core/labels.hpp"
 
 namespace semap {
 

@@ -3,7 +3,7 @@
 #include <filesystem>
 #include <string>
 
-#include "core/pose.hpp"
+#include "semap/core/pose.hpp"
 
 namespace semap {
 

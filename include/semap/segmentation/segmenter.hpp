@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "core/frame.hpp"
-#include "core/labels.hpp"
+#include "semap/core/frame.hpp"
+#include "semap/core/labels.hpp"
 
 namespace semap {
 

@@ -4,7 +4,7 @@
 #include <Eigen/Core>
 #include <optional>
 
-#include "core/pose.hpp"
+#include "semap/core/pose.hpp"
 
 namespace semap {
 

@@ -32,15 +32,15 @@
 #include <string>
 #include <vector>
 
-#include "core/camera.hpp"
-#include "core/frame.hpp"
-#include "core/point_cloud.hpp"
-#include "core/pose.hpp"
-#include "objects/object_mapper.hpp"
-#include "pipeline/semap_config.hpp"
-#include "pipeline/stage_timer.hpp"
-#include "segmentation/segmenter.hpp"
-#include "tsdf/tsdf_map.hpp"
+#include "semap/core/camera.hpp"
+#include "semap/core/frame.hpp"
+#include "semap/core/point_cloud.hpp"
+#include "semap/core/pose.hpp"
+#include "semap/objects/object_summary.hpp"
+#include "semap/pipeline/semap_config.hpp"
+#include "semap/pipeline/stage_timer.hpp"
+#include "semap/segmentation/segmenter.hpp"
+#include "semap/tsdf/tsdf_map.hpp"
 
 namespace semap {
 

@@ -3,11 +3,11 @@
 // (the CLI calls it; mapping never reads ground truth).
 #include <optional>
 
-#include "eval/object_metrics.hpp"
-#include "eval/semantic_metrics.hpp"
-#include "eval/trajectory_metrics.hpp"
-#include "io/dataset.hpp"
-#include "pipeline/outputs.hpp"
+#include "semap/eval/object_metrics.hpp"
+#include "semap/eval/semantic_metrics.hpp"
+#include "semap/eval/trajectory_metrics.hpp"
+#include "semap/io/dataset.hpp"
+#include "semap/pipeline/outputs.hpp"
 
 namespace semap {
 
