@@ -16,7 +16,12 @@ void add_run_command(CLI::App& app, CommandRunner& run) {
     int64_t max_frames = 0;
   };
   auto args = std::make_shared<Args>();
-  cmd->add_option("dataset", args->options.dataset, "dataset folder (TUM, 7-Scenes, YCB-Video, synthetic or dataset.yaml)")->required();
+  cmd->add_option("dataset", args->options.dataset,
+                  "dataset folder or file (TUM, 7-Scenes, YCB-Video, ScanNet, synthetic, dataset.yaml, ROS .bag) or a "
+                  "camera (openni2:, openni2:URI, openni2:FILE.oni)")
+      ->required();
+  cmd->add_option("--rgb-topic", args->options.dataset_options.rgb_topic, "ROS bag: the colour image topic (default: the only one)");
+  cmd->add_option("--depth-topic", args->options.dataset_options.depth_topic, "ROS bag: the depth image topic (default: the only one)");
   cmd->add_option("--out", args->options.out_dir, "output folder")->required();
   cmd->add_option("--config", args->config_path, "YAML config (see `semap config --dump`)");
   add_enum_option(cmd, "--poses", args->options.poses, kPoseSourceNames, "camera poses");

@@ -11,7 +11,10 @@
 #include "pipeline/map_refresh.hpp"
 #include "pipeline/refresh_archive.hpp"
 #include "pipeline/stage.hpp"
+#include <opencv2/imgproc.hpp>
+
 #include "segmentation/groundtruth_segmenter.hpp"
+#include "segmentation/registration.hpp"
 #include "semap/segmentation/segmenter_factory.hpp"
 #include "segmentation/temporal_filter.hpp"
 #include "tracking/depth_repair.hpp"
@@ -85,6 +88,15 @@ DepthRepairParams repair_params(const TrackingConfig& c) {
   return {c.depth_repair_radius, c.depth_repair_gray_threshold, c.depth_repair_min_support};
 }
 
+/// METHODS A1 guides the repair by the colour image at depth resolution; a separate colour
+/// camera's image is resized for it, as the tracker does.
+cv::Mat repaired(const cv::Mat& depth, const cv::Mat& rgb, const TrackingConfig& c) {
+  if (rgb.empty() || rgb.size() == depth.size()) return repair_depth(depth, rgb, repair_params(c));
+  cv::Mat resized;
+  cv::resize(rgb, resized, depth.size(), 0, 0, cv::INTER_AREA);
+  return repair_depth(depth, resized, repair_params(c));
+}
+
 std::unique_ptr<Segmenter> segmenter_from_config(const SemapConfig& config, const CameraModel& camera) {
   return make_segmenter(config.segmentation.segmenter, config.segmentation, camera);
 }
@@ -134,6 +146,7 @@ struct Mapper::Impl {
   void on_located(TrackedFrame& item);
   void fuse_waiting(bool block);
   void fuse(TrackedFrame& item, const std::optional<SegmentationResult>& seg);
+  void register_colour(Frame& frame) const;
   void archive_for_refresh(const TrackedFrame& item);
   void hand_to_objects(TrackedFrame& item, SegmentationResult seg);
   void map_objects(ObjectWork& work);
@@ -197,7 +210,7 @@ TrackedFrame Mapper::Impl::locate(const Frame& frame, const std::optional<Pose>&
   if (given) {
     if (!is_valid_pose(*given, 1e-4)) throw Error("frame " + std::to_string(frame.index), "pose is not a rigid transform");
     item.T_world_camera = *given;
-    if (config.tracking.depth_repair) item.frame.depth = repair_depth(frame.depth, frame.rgb, repair_params(config.tracking));
+    if (config.tracking.depth_repair) item.frame.depth = repaired(frame.depth, frame.rgb, config.tracking);
     timings.add("depth_repair", ms_since(t0));
     return item;
   }
@@ -280,6 +293,7 @@ void Mapper::Impl::fuse_waiting(bool block) {
 
 void Mapper::Impl::fuse(TrackedFrame& item, const std::optional<SegmentationResult>& seg) {
   const auto t0 = Clock::now();
+  register_colour(item.frame);
   IntegrationInput input = make_integration_input(item.frame, camera.depth, item.T_world_camera);
   input.labels = cv::Mat();
   if (seg && seg->has_labels()) {
@@ -295,6 +309,13 @@ void Mapper::Impl::fuse(TrackedFrame& item, const std::optional<SegmentationResu
   archive_for_refresh(item);
   ++frames_fused;
   timings.add("tsdf_integration", ms_since(t0));
+}
+
+void Mapper::Impl::register_colour(Frame& frame) const {
+  // METHODS B2: colour sampled at depth pixels, so that the TSDF colour layer and the object
+  // points get the colour of the surface each depth pixel saw.
+  if (frame.rgb.empty() || !needs_registration(camera)) return;
+  frame.rgb = register_image(frame.rgb, colour_lookup_map(frame.depth, camera), cv::INTER_LINEAR);
 }
 
 void Mapper::Impl::hand_to_objects(TrackedFrame& item, SegmentationResult seg) {
@@ -361,7 +382,7 @@ std::optional<IntegrationInput> Mapper::Impl::refresh_input(size_t sequence, con
       if (repair_archive.has(sequence)) {
         repair_archive.apply(sequence, frame.depth);
       } else if (config.tracking.depth_repair) {
-        frame.depth = repair_depth(frame.depth, frame.rgb, repair_params(config.tracking));
+        frame.depth = repaired(frame.depth, frame.rgb, config.tracking);
       }
     } else {
       return std::nullopt;
@@ -371,6 +392,7 @@ std::optional<IntegrationInput> Mapper::Impl::refresh_input(size_t sequence, con
     return std::nullopt;
   }
   frame.index = sequence;
+  if (!frame_archive.has(sequence)) register_colour(frame);  // the archive keeps registered colour
   IntegrationInput input = make_integration_input(frame, camera.depth, T_world_camera);
   input.labels = label_archive.find(sequence);
   return input;

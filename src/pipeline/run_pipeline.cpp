@@ -10,6 +10,7 @@
 #include "core/paths.hpp"
 #include "core/progress.hpp"
 #include "semap/io/dataset.hpp"
+#include "semap/io/frame_source.hpp"
 #include "pipeline/bounded_queue.hpp"
 #include "pipeline/report.hpp"
 #include "pipeline/simulated_segmenter.hpp"
@@ -21,22 +22,21 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-/// A frame as read from the dataset; nullopt when it was unreadable (skipped).
+/// A frame as read from the source; nullopt when it was unreadable (skipped).
 struct LoadedFrame {
-  size_t index = 0;
   std::optional<Frame> frame;
 };
 
-/// Reads frames 0..count-1 in order, ahead of the consumer on its own thread (PNG decoding
-/// overlaps tracking), or on demand when not threaded.
+/// Pulls frames from the source in order, ahead of the consumer on its own thread (decoding
+/// overlaps tracking), or on demand when not threaded. Stops after `limit` frames (0 = none).
 class Prefetcher {
  public:
-  Prefetcher(size_t count, size_t capacity, bool threaded, std::function<std::optional<Frame>(size_t)> load)
-      : count_(count), load_(std::move(load)), queue_(capacity) {
+  Prefetcher(size_t limit, size_t capacity, bool threaded, std::function<std::optional<LoadedFrame>()> pull)
+      : limit_(limit), pull_(std::move(pull)), queue_(capacity) {
     if (threaded)
       thread_ = std::thread([this] {
-        for (size_t i = 0; i < count_; ++i)
-          if (!queue_.push({i, load_(i)})) break;
+        while (auto loaded = pull_limited())
+          if (!queue_.push(std::move(*loaded))) break;
         queue_.close();
       });
   }
@@ -44,16 +44,16 @@ class Prefetcher {
     queue_.close();
     if (thread_.joinable()) thread_.join();
   }
-  std::optional<LoadedFrame> next() {
-    if (thread_.joinable()) return queue_.pop();
-    if (next_ >= count_) return std::nullopt;
-    const size_t i = next_++;
-    return LoadedFrame{i, load_(i)};
-  }
+  std::optional<LoadedFrame> next() { return thread_.joinable() ? queue_.pop() : pull_limited(); }
 
  private:
-  size_t count_, next_ = 0;
-  std::function<std::optional<Frame>(size_t)> load_;
+  std::optional<LoadedFrame> pull_limited() {
+    if (limit_ > 0 && pulled_ >= limit_) return std::nullopt;
+    ++pulled_;
+    return pull_();
+  }
+  size_t limit_, pulled_ = 0;
+  std::function<std::optional<LoadedFrame>()> pull_;
   BoundedQueue<LoadedFrame> queue_;
   std::thread thread_;
 };
@@ -81,56 +81,69 @@ std::vector<ReportObject> report_objects(const std::vector<ObjectSummary>& objec
   return out;
 }
 
-/// Feeds every readable frame to the mapper; returns (frames fed, frames skipped).
-std::pair<size_t, size_t> feed_frames(Mapper& mapper, const DatasetReader& dataset, const RunOptions& options,
-                                      size_t frame_count) {
-  std::atomic<size_t> skipped{0};
-  auto load = [&](size_t i) -> std::optional<Frame> {
-    const auto t0 = Clock::now();
-    try {
-      Frame frame = dataset.load(i);
-      mapper.add_timing("read", seconds_since(t0) * 1e3);
-      return frame;
-    } catch (const Error& e) {
-      spdlog::warn("skipping frame {}: {}", i, e.what());
-      ++skipped;
-      return std::nullopt;
-    }
-  };
+/// The next frame of the source, or nullopt inside for an unreadable one (warned, skipped);
+/// nullopt at the end or when a stop was requested.
+std::optional<LoadedFrame> pull_frame(FrameSource& source, Mapper& mapper, const std::atomic<bool>* stop) {
+  if (stop && stop->load()) return std::nullopt;
+  const auto t0 = Clock::now();
+  try {
+    std::optional<Frame> frame = source.next();
+    if (!frame) return std::nullopt;
+    mapper.add_timing("read", seconds_since(t0) * 1e3);
+    return LoadedFrame{std::move(frame)};
+  } catch (const Error& e) {
+    spdlog::warn("skipping a frame: {}", e.what());
+    return LoadedFrame{};
+  }
+}
+
+/// Hints for a frame: the ground-truth pose when the run uses them (nullopt: skip the frame).
+std::optional<FrameHints> hints_for(const Frame& frame, PoseSource poses) {
+  FrameHints hints;
+  if (poses == PoseSource::track) return hints;
+  if (!frame.gt_T_world_camera || !is_valid_pose(*frame.gt_T_world_camera, 1e-4)) {
+    spdlog::warn("skipping frame {}: no valid ground-truth pose", frame.index);
+    return std::nullopt;
+  }
+  hints.T_world_camera = frame.gt_T_world_camera;
+  return hints;
+}
+
+/// Feeds every usable frame to the mapper; returns (frames fed, frames skipped).
+std::pair<size_t, size_t> feed_frames(Mapper& mapper, FrameSource& source, const RunOptions& options) {
   const SemapConfig& config = mapper.config();
-  Prefetcher frames(frame_count, static_cast<size_t>(config.pipeline.queue_size), config.pipeline.threads > 1, load);
-  Progress progress("semap run", frame_count);
-  size_t fed = 0, objects = 0;
+  const size_t total = options.max_frames > 0 && source.size_hint() > 0 ? std::min(options.max_frames, source.size_hint())
+                                                                          : std::max(options.max_frames, source.size_hint());
+  Prefetcher frames(options.max_frames, static_cast<size_t>(config.pipeline.queue_size), config.pipeline.threads > 1,
+                    [&] { return pull_frame(source, mapper, options.stop); });
+  Progress progress("semap run", total);
+  size_t fed = 0, skipped = 0, objects = 0;
   while (auto loaded = frames.next()) {
-    if (loaded->frame) {
-      FrameHints hints;
-      if (options.poses == PoseSource::groundtruth) hints.T_world_camera = loaded->frame->gt_T_world_camera;
-      if (hints.T_world_camera && !is_valid_pose(*hints.T_world_camera, 1e-4)) hints.T_world_camera.reset();
-      if (options.poses == PoseSource::groundtruth && !hints.T_world_camera) {
-        spdlog::warn("skipping frame {}: no valid ground-truth pose", loaded->index);
-        ++skipped;
-      } else {
-        mapper.add_frame(*loaded->frame, std::move(hints));
-        ++fed;
-      }
+    const auto hints = loaded->frame ? hints_for(*loaded->frame, options.poses) : std::nullopt;
+    if (hints) {
+      mapper.add_frame(*loaded->frame, *hints);
+      ++fed;
+    } else {
+      ++skipped;
     }
-    if (options.show_progress && loaded->index % 10 == 0) objects = mapper.stats().objects;
-    if (options.show_progress) progress.update(loaded->index + 1, "objects " + std::to_string(objects));
+    if (!options.show_progress) continue;
+    if ((fed + skipped) % 10 == 0) objects = mapper.stats().objects;
+    progress.update(fed + skipped, "objects " + std::to_string(objects));
   }
   if (options.show_progress) progress.finish("objects " + std::to_string(mapper.stats().objects));
-  return {fed, skipped.load()};
+  return {fed, skipped};
 }
 
 /// Refuses to publish a run that mapped nothing useful (issue 22: no silent empty outputs).
-void check_run_is_usable(const DatasetReader& dataset, const MapperStats& stats, const MapOutputs& outputs,
+void check_run_is_usable(const std::string& input, const MapperStats& stats, const MapOutputs& outputs,
                          size_t skipped) {
   if (stats.frames == 0)
-    throw Error(dataset.root(), "no frame could be used: all " + std::to_string(skipped) +
-                                    " were unreadable or without a valid pose (see the warnings above)");
+    throw Error(input, "no frame could be used: all " + std::to_string(skipped) +
+                           " were unreadable or without a valid pose (see the warnings above)");
   if (stats.segmented_frames > 0 && stats.segmentations_failed == stats.segmented_frames)
-    throw Error(dataset.root(), "every segmentation failed (" + stats.segmentation_error + ")");
+    throw Error(input, "every segmentation failed (" + stats.segmentation_error + ")");
   if (outputs.mesh.vertices.empty())
-    throw Error(dataset.root(), "the map is empty: no frame had valid depth within tsdf.min_range..max_range");
+    throw Error(input, "the map is empty: no frame had valid depth within tsdf.min_range..max_range");
 }
 
 void write_run_report(const std::filesystem::path& dir, const RunResult& result, const MapOutputs& outputs) {
@@ -147,55 +160,73 @@ void write_run_report(const std::filesystem::path& dir, const RunResult& result,
 }  // namespace
 
 std::unique_ptr<Segmenter> make_run_segmenter(const RunOptions& options, const SemapConfig& config,
-                                              const DatasetReader& dataset) {
+                                              const FrameSource& source) {
   const std::string spec = resolved_spec(options, config);
   const bool simulated = options.seg_noise > 0;
-  if ((spec == "groundtruth" || simulated) && !dataset.has_label_ground_truth())
-    throw Error(dataset.root(), "--segmenter groundtruth / --seg-noise need per-frame label images, this dataset has none");
-  if (!simulated) return make_segmenter(spec, config.segmentation, dataset.camera());
+  if ((spec == "groundtruth" || simulated) && !(source.dataset() && source.dataset()->has_label_ground_truth()))
+    throw Error(source.name(), "--segmenter groundtruth / --seg-noise need per-frame label images, this input has none");
+  if (!simulated) return make_segmenter(spec, config.segmentation, source.camera());
   SegmentationNoiseParams noise = config.simulated_segmentation;
   noise.flicker_rate = options.seg_noise;
-  return std::make_unique<SimulatedSegmenter>(make_segmenter("groundtruth", config.segmentation, dataset.camera()),
+  return std::make_unique<SimulatedSegmenter>(make_segmenter("groundtruth", config.segmentation, source.camera()),
                                               noise, 1);
 }
 
-RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
-  config.validate();
-  const auto wall_start = Clock::now();
-  tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, config.pipeline.threads);
-  const auto dataset = open_dataset(options.dataset);
-  const size_t frame_count = options.max_frames > 0 ? std::min(options.max_frames, dataset->size()) : dataset->size();
-  if (frame_count == 0) throw Error(options.dataset, "dataset has no frames");
-  const bool poses_given = options.poses == PoseSource::groundtruth;
-  if (poses_given && !dataset->has_ground_truth())
-    throw Error(options.dataset, "--poses groundtruth needs a ground-truth trajectory, this dataset has none");
+namespace {
 
-  std::unique_ptr<Segmenter> segmenter = make_run_segmenter(options, config, *dataset);
-  if (!segmenter && options.show_progress)
-    std::fprintf(stderr, "semap run: no segmenter: mapping geometry and colour only (add --segmenter "
-                         "yolo:MODEL.onnx for classes and objects)\n");
-  SemapConfig mapper_config = config;
-  mapper_config.segmentation.segmenter = "none";  // the segmenter is built here, once
-  Mapper mapper(mapper_config, dataset->camera(), std::move(segmenter));
-  mapper.set_frame_reloader([&](size_t i, bool need_colour) {
+/// The configuration the Mapper runs with: a live camera never makes tracking wait for the
+/// network (METHODS C1 runs on what it can); the segmenter is built by the driver, once.
+SemapConfig mapper_config_for(const SemapConfig& config, const FrameSource& source) {
+  SemapConfig c = config;
+  c.segmentation.segmenter = "none";
+  if (source.is_live()) c.segmentation.when_busy = WhenBusy::drop_oldest;
+  return c;
+}
+
+/// finish() re-reads frames of a dataset for the map refresh (only the depth image when the
+/// colour is not needed); cameras and recordings rely on the Mapper's own archive.
+void set_reloader(Mapper& mapper, const DatasetReader* dataset) {
+  if (!dataset) return;
+  mapper.set_frame_reloader([dataset](size_t i, bool need_colour) {
     if (need_colour) return dataset->load(i);
     Frame frame;
     frame.index = i;
     frame.depth = dataset->load_depth(i);
     return frame;
   });
+}
 
-  const auto [fed, skipped] = feed_frames(mapper, *dataset, options, frame_count);
+}  // namespace
+
+RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
+  config.validate();
+  const auto wall_start = Clock::now();
+  tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, config.pipeline.threads);
+  const auto source = open_frame_source(options.dataset.string(), options.dataset_options);
+  const DatasetReader* dataset = source->dataset();
+  if (dataset && dataset->size() == 0) throw Error(options.dataset, "dataset has no frames");
+  const bool poses_given = options.poses == PoseSource::groundtruth;
+  if (poses_given && !(dataset && dataset->has_ground_truth()))
+    throw Error(options.dataset, "--poses groundtruth needs a ground-truth trajectory, this input has none");
+
+  std::unique_ptr<Segmenter> segmenter = make_run_segmenter(options, config, *source);
+  if (!segmenter && options.show_progress)
+    std::fprintf(stderr, "semap run: no segmenter: mapping geometry and colour only (add --segmenter "
+                         "yolo:MODEL.onnx for classes and objects)\n");
+  Mapper mapper(mapper_config_for(config, *source), source->camera(), std::move(segmenter));
+  set_reloader(mapper, dataset);
+
+  const auto [fed, skipped] = feed_frames(mapper, *source, options);
   const double online_s = seconds_since(wall_start);
   mapper.finish();
   const MapOutputs outputs = collect_outputs(mapper);
   RunResult result;
   result.mapper = mapper.stats();
-  check_run_is_usable(*dataset, result.mapper, outputs, skipped);
+  check_run_is_usable(source->name(), result.mapper, outputs, skipped);
 
   write_map_outputs(mapper, outputs, options.out_dir);
-  if (options.evaluate) result.evaluation = evaluate_run(*dataset, outputs, poses_given);
-  result.dataset = options.dataset.string();
+  if (options.evaluate && dataset) result.evaluation = evaluate_run(*dataset, outputs, poses_given);
+  result.dataset = source->name();
   result.poses = options.poses;
   result.frames_read = fed;
   result.frames_skipped = skipped;

@@ -2,11 +2,13 @@
 // `semap run` as a library call: the dataset loop around a semap::Mapper. It reads the
 // dataset on its own thread, feeds the Mapper, shows progress, writes the outputs, evaluates
 // against ground truth when there is some, and writes the report.
+#include <atomic>
 #include <filesystem>
 #include <map>
 #include <string>
 
 #include "semap/core/params.hpp"
+#include "semap/io/frame_source.hpp"
 #include "semap/pipeline/evaluation.hpp"
 #include "semap/mapper.hpp"
 #include "semap/pipeline/semap_config.hpp"
@@ -21,7 +23,10 @@ inline constexpr EnumNames<PoseSource, 2> kPoseSourceNames{
     {{PoseSource::track, "track"}, {PoseSource::groundtruth, "groundtruth"}}};
 
 struct RunOptions {
+  /// A dataset folder or file (any layout open_dataset() reads), or a camera spec
+  /// ("openni2:", "openni2:URI", "openni2:FILE.oni").
   std::filesystem::path dataset;
+  DatasetOptions dataset_options;  ///< e.g. the ROS bag topics
   std::filesystem::path out_dir;
   PoseSource poses = PoseSource::track;
   /// yolo:PATH | semantic:PATH | groundtruth | precomputed:DIR | none; empty: the config's
@@ -31,6 +36,9 @@ struct RunOptions {
   size_t max_frames = 0;   ///< 0 = all
   bool evaluate = true;    ///< evaluation figures when ground truth exists
   bool show_progress = true;
+  /// When set and it becomes true (e.g. on SIGINT), reading stops; the frames so far are
+  /// mapped to the end (pose graph, refresh) and every output is written.
+  const std::atomic<bool>* stop = nullptr;
 };
 
 /// What a run produced: the report.json document, typed.
@@ -57,9 +65,9 @@ nlohmann::json to_json(const RunResult& result);
 RunResult run_pipeline(const RunOptions& options, const SemapConfig& config);
 
 /// The segmenter a run uses (nullptr: none): the spec of the options or else of the config,
-/// or the built-in noisy one for seg_noise > 0. Throws semap::Error for a spec the dataset
-/// cannot serve (ground-truth labels on a dataset without label images).
+/// or the built-in noisy one for seg_noise > 0. Throws semap::Error for a spec the input
+/// cannot serve (ground-truth labels on a dataset without label images, or a camera).
 std::unique_ptr<Segmenter> make_run_segmenter(const RunOptions& options, const SemapConfig& config,
-                                              const DatasetReader& dataset);
+                                              const FrameSource& source);
 
 }  // namespace semap
