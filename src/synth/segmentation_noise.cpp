@@ -53,21 +53,16 @@ int find_root(std::vector<int>& parent, int i) {
 }  // namespace
 
 void SegmentationNoiseParams::visit(ParamVisitor& v) {
-  v.param("flicker_rate", flicker_rate, "", "fraction of regions (instances, stuff classes) per frame with a wrong class");
-  v.param("pixel_flicker_rate", pixel_flicker_rate, "", "fraction of labelled pixels per frame with a wrong class");
-  v.param("miss_rate", miss_rate, "", "fraction of instances whose mask is dropped per frame");
-  v.param("merge_rate", merge_rate, "", "probability that two touching instances are merged per frame");
-  v.param("border_rate", border_rate, "", "fraction of instances with eroded/dilated borders per frame");
-  v.param("border_px", border_px, "px", "maximum erosion/dilation radius");
+  v.param("flicker_rate", flicker_rate, "", "fraction of regions (instances, stuff classes) per frame with a wrong class", fraction());
+  v.param("pixel_flicker_rate", pixel_flicker_rate, "", "fraction of labelled pixels per frame with a wrong class", fraction());
+  v.param("miss_rate", miss_rate, "", "fraction of instances whose mask is dropped per frame", fraction());
+  v.param("merge_rate", merge_rate, "", "probability that two touching instances are merged per frame", fraction());
+  v.param("border_rate", border_rate, "", "fraction of instances with eroded/dilated borders per frame", fraction());
+  v.param("border_px", border_px, "px", "maximum erosion/dilation radius", {0, 50});
   v.param("noisy_stuff", noisy_stuff, "", "flicker also applies to wall/floor/ceiling/door regions");
 }
 
-void SegmentationNoiseParams::validate() const {
-  for (auto [key, value] : {std::pair{"flicker_rate", flicker_rate}, {"pixel_flicker_rate", pixel_flicker_rate},
-                            {"miss_rate", miss_rate}, {"merge_rate", merge_rate}, {"border_rate", border_rate}})
-    require_param(value >= 0 && value <= 1, key, "must be in [0, 1]");
-  require_param(border_px >= 0 && border_px <= 50, "border_px", "must be in [0, 50]");
-}
+void SegmentationNoiseParams::validate() const { check_param_ranges(*this, "simulated_segmentation"); }
 
 std::pair<cv::Mat, cv::Mat> apply_segmentation_noise(const cv::Mat& labels_in, const cv::Mat& instances_in,
                                                      uint64_t seed, const SegmentationNoiseParams& p) {

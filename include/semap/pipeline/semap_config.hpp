@@ -13,23 +13,19 @@
 namespace semap {
 
 struct PipelineConfig {
-  int threads = 2;        ///< worker threads for the parallel stages (1 = deterministic)
-  int queue_size = 8;     ///< bounded queue length between stages, frames
-  int refresh_cache_mb = 256;  ///< memory for the repair fills the final map refresh reuses
+  int threads = 2;
+  int queue_size = 8;
+  int refresh_cache_mb = 256;
 
   void visit(ParamVisitor& v) {
-    v.param("threads", threads, "", "worker threads (1 gives byte-identical outputs)");
-    v.param("queue_size", queue_size, "frames", "bounded queue length between stages");
+    v.param("threads", threads, "", "worker threads (1: every stage inline, byte-identical outputs)", {1, 256});
+    v.param("queue_size", queue_size, "frames", "bounded queue length between stages", {1, 1024});
     v.param("refresh_cache_mb", refresh_cache_mb, "MiB",
-            "memory for the depth-repair fills the final map refresh reuses instead of decoding colour and "
-            "repairing again (frames past it are re-read; 0 = re-read every frame)");
+            "memory the final map refresh keeps: the depth-repair fills of frames it can re-read, or compressed "
+            "copies of the frames when nothing can re-read them (a camera, a library caller); 0 = keep nothing",
+            {0, 1 << 20});
   }
-  void validate() const {
-    require_param(threads >= 1 && threads <= 256, "pipeline.threads", "must be in [1, 256]");
-    require_param(queue_size >= 1, "pipeline.queue_size", "must be >= 1");
-    require_param(refresh_cache_mb >= 0 && refresh_cache_mb <= (1 << 20), "pipeline.refresh_cache_mb",
-                  "must be in [0, 1048576]");
-  }
+  void validate() const { check_param_ranges(*this, "pipeline"); }
 };
 
 struct SemapConfig {
