@@ -229,18 +229,27 @@ void walk_staging(int dir_fd, const std::string& prefix, std::vector<std::string
   }
 }
 
+/// The folder holding dir/relative reached without symlinks, else -1 (never an error: what
+/// cannot be reached safely is left alone).
+Fd parent_of_listed(int dir_fd, const std::string& relative) {
+  try {
+    return open_chain(dir_fd, fs::path(relative).parent_path(), {}, nullptr);
+  } catch (const Error&) {
+    return Fd(-1);
+  }
+}
+
 /// Unlinks dir/relative when it is a regular file reached without symlinks.
 void remove_listed_file(int dir_fd, const std::string& relative) {
   const fs::path p(relative);
-  Fd parent = open_chain(dir_fd, p.parent_path(), {}, nullptr);
+  Fd parent = parent_of_listed(dir_fd, relative);
   if (parent.fd < 0 || !is_regular_at(parent.fd, p.filename().c_str())) return;
   ::unlinkat(parent.fd, p.filename().c_str(), 0);
 }
 
 void remove_listed_dir_if_empty(int dir_fd, const std::string& relative) {
-  const fs::path p(relative);
-  Fd parent = open_chain(dir_fd, p.parent_path(), {}, nullptr);
-  if (parent.fd >= 0) ::unlinkat(parent.fd, p.filename().c_str(), AT_REMOVEDIR);  // fails unless empty
+  Fd parent = parent_of_listed(dir_fd, relative);
+  if (parent.fd >= 0) ::unlinkat(parent.fd, fs::path(relative).filename().c_str(), AT_REMOVEDIR);  // fails unless empty
 }
 
 bool process_alive(long pid) { return pid > 0 && (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH); }
@@ -334,6 +343,8 @@ OutputFolder::OutputFolder(fs::path dir, OutputFolderOptions options) : dir_(std
     write_at(staging_fd.fd, kStagingMarker, "semap staging folder (removed when the command ends)\n", staging_);
   } catch (...) {
     abandon();
+    ::close(dir_fd_);  // no destructor runs after a throwing constructor: release the lock here
+    dir_fd_ = -1;
     throw;
   }
 }
@@ -424,9 +435,8 @@ std::vector<std::string> OutputFolder::publish() {
       remove_listed_file(dir_fd_, f);
       continue;
     }
-    const fs::path p(f);
-    Fd parent = open_chain(dir_fd_, p.parent_path(), {}, nullptr);
-    if (parent.fd >= 0 && is_regular_at(parent.fd, p.filename().c_str())) manifest_files.push_back(f);
+    Fd parent = parent_of_listed(dir_fd_, f);
+    if (parent.fd >= 0 && is_regular_at(parent.fd, fs::path(f).filename().c_str())) manifest_files.push_back(f);
   }
   std::vector<std::string> old_dirs(old.dirs.begin(), old.dirs.end());
   std::sort(old_dirs.begin(), old_dirs.end(), [](const std::string& a, const std::string& b) { return a.size() > b.size(); });
