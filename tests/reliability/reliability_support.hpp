@@ -11,6 +11,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -98,6 +99,29 @@ inline std::vector<std::string> tree(const fs::path& dir) {
   for (auto it = fs::recursive_directory_iterator(dir); it != fs::recursive_directory_iterator(); ++it)
     if (!it->is_directory() || it->is_symlink()) out.push_back(fs::relative(it->path(), dir).string());
   std::sort(out.begin(), out.end());
+  return out;
+}
+
+/// Contents of every file under a folder (relative path -> bytes; a symlink -> its target) or
+/// of a single file (key ""), to prove that nothing changed.
+inline std::map<std::string, std::string> snapshot(const fs::path& dir) {
+  std::map<std::string, std::string> files;
+  if (fs::is_regular_file(fs::symlink_status(dir))) return {{"", slurp(dir)}};
+  for (const auto& f : tree(dir))
+    files[f] = fs::is_symlink(dir / f) ? "-> " + fs::read_symlink(dir / f).string() : slurp(dir / f);
+  return files;
+}
+/// The names that differ between two snapshots ("" when none): added, removed or changed.
+inline std::string changes(const std::map<std::string, std::string>& before,
+                           const std::map<std::string, std::string>& after) {
+  std::string out;
+  for (const auto& [name, bytes] : after) {
+    const auto it = before.find(name);
+    if (it == before.end()) out += " added:" + name;
+    else if (it->second != bytes) out += " changed:" + name;
+  }
+  for (const auto& [name, bytes] : before)
+    if (!after.count(name)) out += " removed:" + name;
   return out;
 }
 
