@@ -3,6 +3,7 @@
 // a time limit, and the checks every bad input shares (one "semap: error:" line, no crash).
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <Eigen/Core>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -12,11 +13,13 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "io/output_folder.hpp"
 #include "test_support.hpp"
 
 namespace semap::test {
@@ -125,6 +128,30 @@ inline std::string changes(const std::map<std::string, std::string>& before,
   return out;
 }
 
+/// Files of an output folder without semap's bookkeeping (marker, manifests, staging, temps).
+inline std::set<std::string> visible(const fs::path& dir) {
+  std::set<std::string> out;
+  for (const auto& f : tree(dir))
+    if (!OutputFolder::is_internal_name(fs::path(f).begin()->string())) out.insert(f);
+  return out;
+}
+
+/// Adds `offset` (metres) to every translation of a TUM trajectory file: georeferenced ground truth.
+inline void georeference(const fs::path& trajectory, const Eigen::Vector3d& offset) {
+  std::vector<std::string> lines = data_lines(trajectory);
+  for (auto& line : lines) {
+    std::istringstream in(line);
+    double t, x, y, z;
+    std::string rest;
+    in >> t >> x >> y >> z;
+    std::getline(in, rest);
+    char buffer[160];
+    std::snprintf(buffer, sizeof buffer, "%.6f %.9f %.9f %.9f", t, x + offset.x(), y + offset.y(), z + offset.z());
+    line = buffer + rest;
+  }
+  spit(trajectory, join_lines(lines));
+}
+
 /// `semap ARGS...` started in the background, stdout and stderr into `log`.
 inline pid_t spawn_semap(const std::vector<std::string>& args, const fs::path& log) {
   const pid_t pid = ::fork();
@@ -173,5 +200,28 @@ inline void make_small_dataset(const fs::path& dir) {
                             "--width", "160", "--height", "120"});
   ASSERT_EQ(r.exit_code, 0) << r.output;
 }
+
+/// A suite of CLI tests over one small dataset made once (make_small_dataset) in a temp folder.
+class CliSuite : public ::testing::Test {
+ protected:
+  static void make_suite(const std::string& tag) {
+    tmp_ = new TempDir(tag);
+    make_small_dataset(clean());
+  }
+  static void TearDownTestSuite() {
+    delete tmp_;
+    tmp_ = nullptr;
+  }
+  static fs::path clean() { return tmp_->path() / "clean"; }
+  static fs::path path(const std::string& name) { return tmp_->path() / name; }
+  /// A fresh copy of the clean dataset named `name`.
+  static fs::path copy(const std::string& name) {
+    const fs::path dir = path(name);
+    fs::remove_all(dir);
+    fs::copy(clean(), dir, fs::copy_options::recursive);
+    return dir;
+  }
+  inline static TempDir* tmp_ = nullptr;
+};
 
 }  // namespace semap::test

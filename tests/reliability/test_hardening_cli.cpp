@@ -39,11 +39,10 @@ bool has_staging(const fs::path& dir) {
   return false;
 }
 
-class HardeningCli : public ::testing::Test {
+class HardeningCli : public test::CliSuite {
  protected:
   static void SetUpTestSuite() {
-    tmp_ = new test::TempDir("semap_hardening_cli");
-    test::make_small_dataset(clean());
+    make_suite("semap_hardening_cli");
     // A precomputed segmentation of one image, for `semap segment --model precomputed:DIR`.
     const cv::Mat image = read_colour_image(listed(clean() / "rgb.txt", 0));
     fs::create_directories(tmp_->path() / "images");
@@ -53,25 +52,17 @@ class HardeningCli : public ::testing::Test {
     result.labels = cv::Mat(image.size(), CV_8UC1, cv::Scalar(id(Label::kTable)));
     write_segmentation(tmp_->path() / "precomputed", "frame", image, result, "test");
   }
-  static void TearDownTestSuite() {
-    delete tmp_;
-    tmp_ = nullptr;
-  }
-  static fs::path clean() { return tmp_->path() / "clean"; }
-  static fs::path path(const std::string& name) { return tmp_->path() / name; }
-  static fs::path copy(const std::string& name) {
-    const fs::path dir = path(name);
-    fs::remove_all(dir);
-    fs::copy(clean(), dir, fs::copy_options::recursive);
-    return dir;
+  /// A number of 20+ digits in `output`, outside the temp folder's own (random) name.
+  static bool has_long_number(std::string output) {
+    const std::string base = tmp_->path().string();
+    for (size_t at; (at = output.find(base)) != std::string::npos;) output.erase(at, base.size());
+    return std::regex_search(output, std::regex("[0-9]{20}"));
   }
   static std::vector<std::string> run_args(const fs::path& dataset, const fs::path& out) {
     return {"run", dataset.string(), "--out", out.string(), "--poses", "groundtruth", "--segmenter", "groundtruth",
             "--voxel", "0.05", "--threads", "1"};
   }
-  static test::TempDir* tmp_;
 };
-test::TempDir* HardeningCli::tmp_ = nullptr;
 
 // ------------------------------------------------------------ Data loss and writes where they must not go
 
@@ -212,7 +203,7 @@ TEST_F(HardeningCli, CameraMagnitudesOutsidePhysicalRangesAreOneLineErrors) {
     const auto r = run_semap(run_args(d, d.string() + "_out"), 60);
     expect_one_line_error(r, {"dataset.yaml", "camera " + key});
     EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 20.0);
-    EXPECT_FALSE(std::regex_search(r.output, std::regex("[0-9]{20}"))) << r.output;
+    EXPECT_FALSE(has_long_number(r.output)) << r.output;
   }
 }
 
@@ -291,18 +282,7 @@ TEST_F(HardeningCli, FifosDevicesAndFoldersNeverHang) {
 
 TEST_F(HardeningCli, GeoreferencedGroundTruthMapsLikeTheLocalOne) {
   const fs::path geo = copy("georeferenced");
-  std::vector<std::string> lines = data_lines(geo / "groundtruth.txt");
-  for (auto& line : lines) {
-    std::istringstream in(line);
-    double t, x, y, z;
-    std::string rest;
-    in >> t >> x >> y >> z;
-    std::getline(in, rest);
-    char buffer[160];
-    std::snprintf(buffer, sizeof buffer, "%.6f %.9f %.9f %.9f", t, x + 412345.0, y + 5312345.0, z + 120.0);
-    line = buffer + rest;
-  }
-  spit(geo / "groundtruth.txt", join_lines(lines));
+  test::georeference(geo / "groundtruth.txt", {412345.0, 5312345.0, 120.0});
   const auto local = run_semap(run_args(clean(), path("local_out")));
   const auto far = run_semap(run_args(geo, path("geo_out")));
   ASSERT_EQ(local.exit_code, 0) << local.output;
@@ -365,7 +345,7 @@ TEST_F(HardeningCli, EveryCliErrorExitsOneWithOneCompactLine) {
     SCOPED_TRACE(shown);
     const auto r = run_semap(args, 30);
     expect_one_line_error(r, {});
-    EXPECT_FALSE(std::regex_search(r.output, std::regex("[0-9]{20}"))) << r.output;
+    EXPECT_FALSE(has_long_number(r.output)) << r.output;
   }
   EXPECT_FALSE(fs::exists(path("never")));
   for (const char* ok : {"--help", "--version"}) EXPECT_EQ(run_semap({ok}).exit_code, 0) << ok;

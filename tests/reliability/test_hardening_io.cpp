@@ -282,18 +282,7 @@ TEST(HardeningFiles, FifosDevicesFoldersAndLinksAreRefusedSayingWhatTheyAre) {
 TEST(HardeningGroundTruth, GeoreferencedPosesGetALocalOriginOthersAreUntouched) {
   test::TempDir tmp("semap_hardening_gt");
   const fs::path geo = copy_of(tmp, "geo");
-  std::vector<std::string> lines = data_lines(geo / "groundtruth.txt");
-  for (auto& line : lines) {
-    std::istringstream in(line);
-    double t, x, y, z;
-    std::string rest;
-    in >> t >> x >> y >> z;
-    std::getline(in, rest);
-    char buffer[128];
-    std::snprintf(buffer, sizeof buffer, "%.6f %.9f %.9f %.9f", t, x + 512345.25, y + 5412345.5, z + 312.75);
-    line = buffer + rest;
-  }
-  spit(geo / "groundtruth.txt", join_lines(lines));
+  test::georeference(geo / "groundtruth.txt", {512345.25, 5412345.5, 312.75});
   const auto clean = open_dataset(small_dataset()), local = open_dataset(geo);
   const Trajectory a = clean->ground_truth(), b = local->ground_truth();
   ASSERT_EQ(a.size(), b.size());

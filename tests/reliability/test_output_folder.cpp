@@ -20,12 +20,9 @@ using test::slurp;
 using test::spit;
 using test::tree;
 
-/// Files of a folder without semap's bookkeeping names.
 std::vector<std::string> visible(const fs::path& dir) {
-  std::vector<std::string> out;
-  for (const auto& f : tree(dir))
-    if (!OutputFolder::is_internal_name(fs::path(f).begin()->string())) out.push_back(f);
-  return out;
+  const auto files = test::visible(dir);
+  return {files.begin(), files.end()};
 }
 
 void publish_run(const fs::path& dir, const std::vector<std::pair<std::string, std::string>>& files,

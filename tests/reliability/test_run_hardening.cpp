@@ -26,27 +26,11 @@ using test::spit;
 using test::changes;
 using test::snapshot;
 using test::tree;
+using test::visible;
 
-/// Files of a run folder without semap's bookkeeping (marker, manifests, staging, temp files).
-std::set<std::string> visible(const fs::path& dir) {
-  std::set<std::string> out;
-  for (const auto& f : tree(dir))
-    if (!OutputFolder::is_internal_name(fs::path(f).begin()->string())) out.insert(f);
-  return out;
-}
-
-class RunHardening : public ::testing::Test {
+class RunHardening : public test::CliSuite {
  protected:
-  static void SetUpTestSuite() {
-    tmp_ = new test::TempDir("semap_run_hardening");
-    test::make_small_dataset(clean());
-  }
-  static void TearDownTestSuite() {
-    delete tmp_;
-    tmp_ = nullptr;
-  }
-  static fs::path clean() { return tmp_->path() / "clean"; }
-  static fs::path path(const std::string& name) { return tmp_->path() / name; }
+  static void SetUpTestSuite() { make_suite("semap_run_hardening"); }
   static std::vector<std::string> run_args(const fs::path& dataset, const fs::path& out,
                                            std::vector<std::string> extra = {}) {
     std::vector<std::string> args = {"run", dataset.string(), "--out", out.string(), "--poses", "groundtruth",
@@ -55,9 +39,7 @@ class RunHardening : public ::testing::Test {
     args.insert(args.end(), extra.begin(), extra.end());
     return args;
   }
-  static test::TempDir* tmp_;
 };
-test::TempDir* RunHardening::tmp_ = nullptr;
 
 // ------------------------------------------------------------ Data loss and writes where they must not go
 
