@@ -224,7 +224,9 @@ TEST(HardeningImages, EveryFormatsDeclaredSizeIsCheckedBeforeDecoding) {
   EXPECT_GE(formats, 5u);
 
   const long rss_before = max_rss_mb();
-  for (const auto& [name, bytes] : image_bombs()) {
+  for (const auto& bomb : image_bombs()) {
+    const std::string& name = bomb.first;  // named: clang 14 cannot capture structured bindings
+    const std::string& bytes = bomb.second;
     spit(tmp / name, bytes);
     const auto t0 = std::chrono::steady_clock::now();
     const std::string message = error_of([&] { read_colour_image(tmp / name); });
@@ -237,11 +239,13 @@ TEST(HardeningImages, EveryFormatsDeclaredSizeIsCheckedBeforeDecoding) {
   EXPECT_LT(max_rss_mb() - rss_before, 150) << "MB of memory grew while refusing the bombs";
 
   // Formats nobody checked are not handed to a decoder.
-  for (const auto& [name, bytes] : std::vector<std::pair<std::string, std::string>>{
+  for (const auto& format : std::vector<std::pair<std::string, std::string>>{
            {"x.hdr", "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 16384 +X 16384\n"},
            {"x.exr", std::string("\x76\x2f\x31\x01", 4) + std::string(60, '\0')},
            {"x.ras", std::string("\x59\xa6\x6a\x95", 4) + std::string(60, '\0')},
            {"x.pfm", "PF\n16384 16384\n-1\n"}}) {
+    const std::string& name = format.first;
+    const std::string& bytes = format.second;
     spit(tmp / name, bytes);
     EXPECT_TRUE(mentions(error_of([&] { read_colour_image(tmp / name); }), "unsupported image format")) << name;
   }
@@ -263,7 +267,9 @@ TEST(HardeningFiles, FifosDevicesFoldersAndLinksAreRefusedSayingWhatTheyAre) {
                                                                {tmp / "loop_a", "is a symlink loop"},
                                                                {tmp / "absent.txt", "not found"},
                                                                {tmp / std::string(300, 'n'), "name too long"}};
-  for (const auto& [path, kind] : kinds) {
+  for (const auto& entry : kinds) {
+    const fs::path& path = entry.first;
+    const std::string& kind = entry.second;
     SCOPED_TRACE(path.string().substr(0, 80));
     // Every reader goes through the one helper: lists/trajectories, configs, images, meshes, JSON.
     EXPECT_TRUE(mentions(error_of([&] { read_tum_trajectory(path); }), kind));
