@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <csignal>
 #include <cstring>
@@ -380,6 +381,57 @@ std::vector<std::string> OutputFolder::read_manifest(const fs::path& dir, const 
   return {m.files.begin(), m.files.end()};
 }
 
+namespace {
+
+/// Sorted, with `last` moved to the end in its order (the files that say "complete").
+void order_for_publish(std::vector<std::string>& files, const std::vector<std::string>& last) {
+  std::sort(files.begin(), files.end());
+  for (const auto& name : last) {
+    const auto it = std::find(files.begin(), files.end(), name);
+    if (it == files.end()) continue;
+    files.erase(it);
+    files.push_back(name);
+  }
+}
+
+/// Renames staging/rel to dir/rel for every file, creating (and recording) folders on the way.
+void move_into_place(int dir_fd, int staging_fd, const std::vector<std::string>& files, const fs::path& dir,
+                     const fs::path& staging, std::vector<std::string>& created_dirs) {
+  for (const auto& rel : files) {
+    const fs::path p(rel);
+    Fd target = open_chain(dir_fd, p.parent_path(), dir, &created_dirs);
+    Fd source = open_chain(staging_fd, p.parent_path(), staging, nullptr);
+    if (source.fd < 0 || ::renameat(source.fd, p.filename().c_str(), target.fd, p.filename().c_str()) != 0) {
+      const int error = errno;
+      throw Error(dir / p, error == EISDIR || error == ENOTEMPTY ? "is a folder; cannot replace it with a file"
+                                                                  : "cannot publish: " + errno_text(error));
+    }
+  }
+}
+
+/// The previous run's files and folders this run did not write: removed (remove_stale) or
+/// kept and listed again. `manifest` holds this run's entries and receives the kept ones.
+void settle_previous_run(int dir_fd, const Manifest& old, bool remove_stale, Manifest& manifest) {
+  for (const auto& f : old.files) {
+    if (manifest.files.count(f)) continue;
+    if (remove_stale) {
+      remove_listed_file(dir_fd, f);
+      continue;
+    }
+    Fd parent = parent_of_listed(dir_fd, f);
+    if (parent.fd >= 0 && is_regular_at(parent.fd, fs::path(f).filename().c_str())) manifest.files.insert(f);
+  }
+  std::vector<std::string> old_dirs(old.dirs.begin(), old.dirs.end());
+  std::sort(old_dirs.begin(), old_dirs.end(), [](const auto& a, const auto& b) { return a.size() > b.size(); });
+  for (const auto& d : old_dirs) {  // deepest first
+    if (manifest.dirs.count(d)) continue;
+    if (remove_stale) remove_listed_dir_if_empty(dir_fd, d);
+    else manifest.dirs.insert(d);
+  }
+}
+
+}  // namespace
+
 std::vector<std::string> OutputFolder::publish() {
   if (done_) throw Error(dir_, "output folder already published or abandoned");
   PublishingScope publishing;
@@ -388,13 +440,7 @@ std::vector<std::string> OutputFolder::publish() {
   if (staging_fd.fd < 0) throw Error(staging_, "staging folder vanished before publishing");
   std::vector<std::string> files, dirs;
   walk_staging(staging_fd.fd, "", files, dirs, 0);
-  std::sort(files.begin(), files.end());
-  for (const auto& last : options_.publish_last) {  // move to the end, in the given order
-    const auto it = std::find(files.begin(), files.end(), last);
-    if (it == files.end()) continue;
-    files.erase(it);
-    files.push_back(last);
-  }
+  order_for_publish(files, options_.publish_last);
 
   // Journal first: everything semap may own in DIR after this point, should we be cut short.
   const std::string manifest = manifest_name(options_.tool), journal = journal_name(options_.tool);
@@ -402,50 +448,25 @@ std::vector<std::string> OutputFolder::publish() {
   const Manifest pending = parse_manifest(read_at(dir_fd_, journal));
   old.files.insert(pending.files.begin(), pending.files.end());
   old.dirs.insert(pending.dirs.begin(), pending.dirs.end());
-  std::vector<std::string> journal_files(old.files.begin(), old.files.end());
-  journal_files.insert(journal_files.end(), files.begin(), files.end());
-  std::set<std::string> journal_dirs = old.dirs;
-  journal_dirs.insert(dirs.begin(), dirs.end());
-  write_at(dir_fd_, journal, manifest_text(options_.tool, journal_files, journal_dirs, false), dir_ / journal);
+  Manifest everything = old;
+  everything.files.insert(files.begin(), files.end());
+  everything.dirs.insert(dirs.begin(), dirs.end());
+  write_at(dir_fd_, journal, manifest_text(options_.tool, {everything.files.begin(), everything.files.end()},
+                                           everything.dirs, false), dir_ / journal);
   ::unlinkat(dir_fd_, manifest.c_str(), 0);  // the folder no longer claims a complete run
   for (const auto& last : options_.publish_last)
     if (old.files.count(last)) remove_listed_file(dir_fd_, last);
 
   std::vector<std::string> created_dirs;
-  for (const auto& rel : files) {
-    const fs::path p(rel);
-    Fd target = open_chain(dir_fd_, p.parent_path(), dir_, &created_dirs);
-    Fd source = open_chain(staging_fd.fd, p.parent_path(), staging_, nullptr);
-    if (source.fd < 0 || ::renameat(source.fd, p.filename().c_str(), target.fd, p.filename().c_str()) != 0) {
-      const int error = errno;
-      throw Error(dir_ / p, error == EISDIR || error == ENOTEMPTY ? "is a folder; cannot replace it with a file"
-                                                                   : "cannot publish: " + errno_text(error));
-    }
-  }
+  move_into_place(dir_fd_, staging_fd.fd, files, dir_, staging_, created_dirs);
 
-  // This run's files; then the previous run's files it did not write are removed (or kept).
-  const std::set<std::string> new_files(files.begin(), files.end());
-  std::set<std::string> manifest_dirs(created_dirs.begin(), created_dirs.end());
+  // Folders listed: the ones this publish created and the earlier ones still in use.
+  Manifest now{{files.begin(), files.end()}, {created_dirs.begin(), created_dirs.end()}};
   for (const auto& d : dirs)
-    if (old.dirs.count(d)) manifest_dirs.insert(d);
-  std::vector<std::string> manifest_files = files;
-  for (const auto& f : old.files) {
-    if (new_files.count(f)) continue;
-    if (options_.remove_stale) {
-      remove_listed_file(dir_fd_, f);
-      continue;
-    }
-    Fd parent = parent_of_listed(dir_fd_, f);
-    if (parent.fd >= 0 && is_regular_at(parent.fd, fs::path(f).filename().c_str())) manifest_files.push_back(f);
-  }
-  std::vector<std::string> old_dirs(old.dirs.begin(), old.dirs.end());
-  std::sort(old_dirs.begin(), old_dirs.end(), [](const std::string& a, const std::string& b) { return a.size() > b.size(); });
-  for (const auto& d : old_dirs) {
-    if (manifest_dirs.count(d)) continue;
-    if (options_.remove_stale) remove_listed_dir_if_empty(dir_fd_, d);
-    else manifest_dirs.insert(d);
-  }
-  write_at(dir_fd_, manifest, manifest_text(options_.tool, manifest_files, manifest_dirs, true), dir_ / manifest);
+    if (old.dirs.count(d)) now.dirs.insert(d);
+  settle_previous_run(dir_fd_, old, options_.remove_stale, now);
+  write_at(dir_fd_, manifest, manifest_text(options_.tool, {now.files.begin(), now.files.end()}, now.dirs, true),
+           dir_ / manifest);
   ::unlinkat(dir_fd_, journal.c_str(), 0);
   remove_tree_at(dir_fd_, staging_name);
   done_ = true;
