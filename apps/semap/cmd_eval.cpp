@@ -1,6 +1,8 @@
 // `semap eval ate|semantic|objects`: the metrics of METHODS.md D on result files.
 // --json prints exactly one JSON object on stdout; otherwise an aligned table.
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -9,6 +11,7 @@
 
 #include "apps/semap/commands.hpp"
 #include "semap/core/error.hpp"
+#include "core/paths.hpp"
 #include "semap/eval/object_metrics.hpp"
 #include "semap/eval/semantic_metrics.hpp"
 #include "semap/eval/trajectory_metrics.hpp"
@@ -29,7 +32,21 @@ struct EvalOptions {
 
 void require_file(const std::string& path, const char* flag) {
   if (path.empty()) throw Error(flag, "missing");
-  if (!std::filesystem::is_regular_file(path)) throw Error(path, "not found (" + std::string(flag) + ")");
+  require_regular_file(path, std::string(flag) + " file");
+}
+
+/// CLI11's Range lets NaN through (every comparison with NaN is false): finite numbers only.
+CLI::Validator finite_in(double lo, double hi) {
+  const std::string range = "[" + compact_number(lo) + ", " + compact_number(hi) + "]";
+  return CLI::Validator(
+      [lo, hi, range](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || *end != '\0' || !std::isfinite(v) || v < lo || v > hi)
+          return "must be a finite number in " + range + ", got '" + message_text(text, 40) + "'";
+        return {};
+      },
+      "FINITE in " + range);
 }
 
 void print_json(const nlohmann::json& j) { std::printf("%s\n", j.dump(2).c_str()); }
@@ -56,8 +73,12 @@ int run_ate(const EvalOptions& o) {
   std::printf("%-26s %12.6f\n", "ATE mean [m]", ate.mean);
   std::printf("%-26s %12.6f\n", "ATE median [m]", ate.median);
   std::printf("%-26s %12.6f\n", "ATE max [m]", ate.max);
-  std::printf("%-26s %12.6f\n", "RPE trans rmse [m/s]", rpe.trans_rmse_m_per_s);
-  std::printf("%-26s %12.6f\n", "RPE rot rmse [deg/s]", rpe.rot_rmse_deg_per_s);
+  if (rpe.pairs == 0) {
+    std::printf("%-26s %12s  (%s)\n", "RPE", "n/a", rpe.no_pairs_reason.c_str());
+  } else {
+    std::printf("%-26s %12.6f\n", "RPE trans rmse [m/s]", rpe.trans_rmse_m_per_s);
+    std::printf("%-26s %12.6f\n", "RPE rot rmse [deg/s]", rpe.rot_rmse_deg_per_s);
+  }
   std::printf("%-26s %12zu\n", "RPE pairs", rpe.pairs);
   return 0;
 }
@@ -77,6 +98,9 @@ int run_semantic(const EvalOptions& o) {
   }
   std::printf("semantic     %s vs %s (%zu map vertices, %zu GT points)\n", o.map.c_str(), o.gt.c_str(),
               e.map_vertices, e.gt_points);
+  if (e.map_vertices_non_finite + e.gt_points_non_finite > 0)
+    std::printf("excluded     %zu map vertices and %zu GT points with NaN/Inf coordinates\n", e.map_vertices_non_finite,
+                e.gt_points_non_finite);
   std::printf("%-14s %8s %10s %8s %10s %12s\n", "class", "IoU", "precision", "recall", "GT points", "map vertices");
   for (const auto& c : e.classes)
     std::printf("%-14s %8.4f %10.4f %8.4f %10zu %12zu\n", std::string(class_name(c.class_id)).c_str(), c.iou,
@@ -122,8 +146,10 @@ void add_eval_command(CLI::App& app, CommandRunner& run) {
   auto* ate = cmd->add_subcommand("ate", "ATE RMSE after SE(3) alignment + RPE (TUM benchmark definitions)");
   ate->add_option("--gt", opt->gt, "ground-truth TUM trajectory")->required();
   ate->add_option("--est", opt->est, "estimated TUM trajectory")->required();
-  ate->add_option("--max-dt", opt->max_dt, "max timestamp difference for association [s]")->capture_default_str();
-  ate->add_option("--delta", opt->delta_s, "RPE time delta [s]")->capture_default_str();
+  ate->add_option("--max-dt", opt->max_dt, "max timestamp difference for association [s]")
+      ->check(finite_in(1e-6, 10.0))
+      ->capture_default_str();
+  ate->add_option("--delta", opt->delta_s, "RPE time delta [s]")->check(finite_in(1e-3, 1e6))->capture_default_str();
   ate->add_flag("--json", opt->json, "print one JSON object");
   ate->callback([&run, opt] { run = [opt] { return run_ate(*opt); }; });
 
@@ -131,9 +157,11 @@ void add_eval_command(CLI::App& app, CommandRunner& run) {
   sem->add_option("--gt", opt->gt, "gt_points.ply (x y z label [instance])")->required();
   sem->add_option("--map", opt->map, "labelled mesh or point cloud PLY")->required();
   sem->add_option("--max-dist", opt->semantic.max_distance_m, "label-transfer neighbour distance [m]")
+      ->check(finite_in(1e-4, 10.0))
       ->capture_default_str();
   sem->add_option("--completeness-dist", opt->semantic.completeness_distance_m,
                   "a GT point is covered by a map vertex within this [m]")
+      ->check(finite_in(1e-4, 10.0))
       ->capture_default_str();
   sem->add_flag("--json", opt->json, "print one JSON object");
   sem->callback([&run, opt] { run = [opt] { return run_semantic(*opt); }; });
@@ -142,6 +170,7 @@ void add_eval_command(CLI::App& app, CommandRunner& run) {
   obj->add_option("--gt", opt->gt, "scene.json or gt_points.ply")->required();
   obj->add_option("--map", opt->map, "objects.json")->required();
   obj->add_option("--voxel", opt->objects.voxel_size_m, "voxel size of the point-set IoU [m]")
+      ->check(finite_in(1e-3, 1.0))
       ->capture_default_str();
   obj->add_flag("--json", opt->json, "print one JSON object");
   obj->callback([&run, opt] { run = [opt] { return run_objects(*opt); }; });

@@ -2,11 +2,14 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <map>
 #include <memory>
 
 #include "apps/semap/commands.hpp"
 #include "semap/core/error.hpp"
+#include "core/paths.hpp"
 #include "io/image_io.hpp"
+#include "io/output_folder.hpp"
 #include "semap/pipeline/semap_config.hpp"
 #include "segmentation/segmentation_io.hpp"
 #include "semap/segmentation/segmenter_factory.hpp"
@@ -34,10 +37,24 @@ void add_segment_command(CLI::App& app, CommandRunner& run) {
   cmd->add_option("--out,-o", opts->out, "output folder")->required();
   cmd->callback([&run, opts] {
     run = [opts]() -> int {
+      const InterruptGuard interrupts;  // Ctrl-C: stop between images, publish nothing
       const SemapConfig config = load_semap_config(opts->config);
+      // Outputs are named after the image: two inputs with one name would overwrite each other.
+      std::map<std::string, std::string> by_name;
+      for (const auto& image : opts->images) {
+        const std::string name = std::filesystem::path(image).stem().string();
+        if (name.empty()) throw Error(image, "has no file name to name its outputs after");
+        if (const auto [it, added] = by_name.emplace(name, image); !added)
+          throw Error(image, "has the same name '" + name + "' as " + it->second +
+                                 ": their outputs would overwrite each other (segment them into separate --out folders)");
+        require_regular_file(image, "image");
+      }
       auto segmenter = make_segmenter(opts->model, config.segmentation, CameraModel{});
       if (!segmenter) throw Error("--model", "'" + opts->model + "' gives no segmenter");
+      // Staged and published at the end (io/output_folder.hpp); earlier calls' outputs stay.
+      OutputFolder out(opts->out, {.tool = "segment", .refuse_foreign_non_empty = false, .remove_stale = false, .publish_last = {}});
       for (size_t i = 0; i < opts->images.size(); ++i) {
+        throw_if_interrupted();
         const std::filesystem::path path = opts->images[i];
         Frame frame;
         frame.index = i;
@@ -47,12 +64,14 @@ void add_segment_command(CLI::App& app, CommandRunner& run) {
         const SegmentationResult result = segmenter->segment(frame);
         const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
         const std::string name = path.stem().string();
-        write_segmentation(opts->out, name, frame.rgb, result, segmenter->name());
+        write_segmentation(out.staging(), name, frame.rgb, result, segmenter->name());
         std::string summary;
         for (const auto& inst : result.instances)
           summary += fmt::format(" {} {:.2f}", class_name(inst.class_id), inst.score);
         spdlog::info("{}: {} instances in {:.0f} ms{}", path.string(), result.instances.size(), ms, summary);
       }
+      throw_if_interrupted();
+      out.publish();
       return 0;
     };
   });

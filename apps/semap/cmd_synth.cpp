@@ -5,6 +5,7 @@
 #include "apps/semap/commands.hpp"
 #include "semap/core/error.hpp"
 #include "semap/io/config_loader.hpp"
+#include "io/output_folder.hpp"
 #include "synth/synth_config.hpp"
 
 namespace semap::app {
@@ -21,7 +22,10 @@ struct SynthOptions {
 void add_synth_command(CLI::App& app, CommandRunner& run) {
   auto* cmd = app.add_subcommand("synth", "Render the synthetic RGB-D dataset with perfect ground truth");
   auto opt = std::make_shared<SynthOptions>();
-  cmd->add_option("--out", opt->out, "output folder (written atomically)")->required();
+  cmd->add_option("--out", opt->out,
+                  "output folder: new, empty, or made by an earlier `semap synth` (never someone else's data); "
+                  "published only when complete")
+      ->required();
   cmd->add_option("--config", opt->config_file, "YAML with a 'synth' section (applied before the flags)")
       ->check(CLI::ExistingFile);
   cmd->add_option("--frames", opt->config.frames, "number of frames (one closed loop)")->capture_default_str();
@@ -35,6 +39,7 @@ void add_synth_command(CLI::App& app, CommandRunner& run) {
   cmd->add_option("--height", opt->config.height, "image height")->capture_default_str();
   cmd->callback([&run, opt, cmd] {
     run = [opt, cmd]() -> int {
+      const InterruptGuard interrupts;  // Ctrl-C: stop between frames, publish nothing
       SynthConfig config;
       if (!opt->config_file.empty())
         load_config_file(opt->config_file, [&](ParamVisitor& v) {

@@ -1,6 +1,57 @@
 #include "semap/core/camera.hpp"
 
+#include <cmath>
+
+#include "semap/core/error.hpp"
+
 namespace semap {
+
+namespace {
+
+void check_intrinsics(const PinholeIntrinsics& k, const std::string& source, const std::string& prefix) {
+  using L = CameraLimits;
+  const auto fail = [&](const std::string& key, double value, const std::string& why) {
+    throw Error(source, "camera " + prefix + key + " = " + compact_number(value) + " " + why);
+  };
+  for (const auto& [key, size] : {std::pair{"width", k.width}, std::pair{"height", k.height}})
+    if (size < L::kMinSize || size > L::kMaxSize)
+      fail(key, size, "is outside " + std::to_string(L::kMinSize) + ".." + std::to_string(L::kMaxSize) + " pixels");
+  if (double(k.width) * k.height > L::kMaxPixels)
+    fail("width x height", double(k.width) * k.height, "pixels is more than " + compact_number(L::kMaxPixels));
+  const auto check_focal = [&](const char* key, double f, int size, const char* axis) {
+    const double lo = L::kMinFocalPerSize * size, hi = L::kMaxFocalPerSize * size;
+    if (!std::isfinite(f) || f < lo || f > hi)
+      fail(key, f, "is outside " + compact_number(lo) + ".." + compact_number(hi) + " pixels (" +
+                       compact_number(L::kMinFocalPerSize) + ".." + compact_number(L::kMaxFocalPerSize) + " x the " +
+                       axis + " " + std::to_string(size) + ", a field of view of about 170 to 1 degrees)");
+  };
+  check_focal("fx", k.fx, k.width, "width");
+  check_focal("fy", k.fy, k.height, "height");
+  const auto check_centre = [&](const char* key, double c, int size, const char* axis) {
+    if (!std::isfinite(c) || c < 0 || c > size)
+      fail(key, c, std::string("is outside the image (0..") + std::to_string(size) + ", the " + axis +
+                       "): the principal point must lie inside the image");
+  };
+  check_centre("cx", k.cx, k.width, "width");
+  check_centre("cy", k.cy, k.height, "height");
+}
+
+}  // namespace
+
+void validate_camera(const CameraModel& camera, const std::string& source) {
+  using L = CameraLimits;
+  check_intrinsics(camera.depth, source, "");
+  const double s = camera.depth_scale;
+  if (!std::isfinite(s) || s < L::kMinDepthScale || s > L::kMaxDepthScale)
+    throw Error(source, "camera depth_scale = " + compact_number(s) + " is outside " + compact_number(L::kMinDepthScale) +
+                            ".." + compact_number(L::kMaxDepthScale) + " raw units per metre");
+  if (!camera.colour) return;
+  check_intrinsics(camera.colour->intrinsics, source, "colour.");
+  const Pose& T = camera.colour->T_depth_colour;
+  if (!T.matrix().allFinite() || T.translation().norm() > L::kMaxColourBaseline)
+    throw Error(source, "camera colour.T_depth_colour baseline = " + compact_number(T.translation().norm()) +
+                            " m is more than " + compact_number(L::kMaxColourBaseline) + " m");
+}
 
 Eigen::Matrix3d PinholeIntrinsics::K() const {
   Eigen::Matrix3d k;

@@ -3,12 +3,11 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <map>
-#include <sstream>
 #include <string>
 
 #include "semap/core/error.hpp"
+#include "core/paths.hpp"
 #include "semap/io/ply_io.hpp"
 
 namespace semap {
@@ -59,15 +58,21 @@ double iou(const VoxelSet& a, const VoxelSet& b) {
 }
 
 nlohmann::json read_json(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw Error(path, "cannot open");
-  std::stringstream text;
-  text << in.rdbuf();
+  const std::string text = read_regular_file(path, kMaxTextFileBytes, "JSON file");
   try {
-    return nlohmann::json::parse(text.str());
+    return nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {
     throw Error(path, std::string("malformed JSON: ") + e.what());
   }
+}
+
+/// Objects are matched and counted by id: a repeated id would count one object twice.
+void require_unique_ids(const std::vector<EvalObject>& objects, const std::filesystem::path& file, const char* key) {
+  std::map<uint32_t, size_t> first;
+  for (size_t k = 0; k < objects.size(); ++k)
+    if (const auto [it, added] = first.emplace(objects[k].id, k); !added)
+      throw Error(file, std::string("\"") + key + "\" " + std::to_string(objects[k].id) + " appears twice (objects " +
+                            std::to_string(it->second) + " and " + std::to_string(k) + "): ids must be unique");
 }
 
 ClassId class_of(const nlohmann::json& object) {
@@ -98,8 +103,14 @@ void sample_box_surface(const nlohmann::json& obb, double spacing, std::vector<E
     throw std::invalid_argument("invalid box");
   for (int axis = 0; axis < 3; ++axis) {
     const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-    const int nu = std::max(1, static_cast<int>(std::ceil(2 * half[u] / spacing)));
-    const int nv = std::max(1, static_cast<int>(std::ceil(2 * half[v] / spacing)));
+    // A huge box (or a tiny spacing) must not make us sample billions of points.
+    constexpr double kMaxSamplesPerFace = 1e7;
+    const double su = std::ceil(2 * half[u] / spacing), sv = std::ceil(2 * half[v] / spacing);
+    if (!(su * sv <= kMaxSamplesPerFace))
+      throw std::invalid_argument("box face of " + compact_number(2 * half[u]) + " x " + compact_number(2 * half[v]) +
+                                  " m is too large to sample every " + compact_number(spacing) + " m");
+    const int nu = std::max(1, static_cast<int>(su));
+    const int nv = std::max(1, static_cast<int>(sv));
     for (double side : {-1.0, 1.0})
       for (int iu = 0; iu <= nu; ++iu)
         for (int iv = 0; iv <= nv; ++iv) {
@@ -239,11 +250,12 @@ std::vector<EvalObject> gt_objects_from_scene_json(const std::filesystem::path& 
     }
     ++k;
   }
+  require_unique_ids(out, path, "instance_id");
   return out;
 }
 
 std::vector<EvalObject> load_gt_objects(const std::filesystem::path& path, double spacing) {
-  if (!std::filesystem::exists(path)) throw Error(path, "not found");
+  require_regular_file(path, "ground truth");
   const std::string ext = path.extension().string();
   if (ext == ".json") return gt_objects_from_scene_json(path, spacing);
   if (ext == ".ply") {
@@ -282,6 +294,7 @@ std::vector<EvalObject> load_map_objects(const std::filesystem::path& objects_js
     out.push_back(std::move(o));
     ++k;
   }
+  require_unique_ids(out, objects_json, "id");
   return out;
 }
 

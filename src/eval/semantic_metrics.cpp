@@ -21,11 +21,26 @@ ClassId checked_label(ClassId c, const char* which) {
   return c;
 }
 
+/// `cloud` without its points that have a NaN/Inf coordinate; `dropped` counts them.
+PointCloud finite_points(const PointCloud& cloud, size_t& dropped) {
+  dropped = 0;
+  for (const auto& p : cloud.points) dropped += !p.allFinite();
+  if (dropped == 0 || !cloud.consistent()) return cloud;
+  PointCloud kept;
+  for (size_t i = 0; i < cloud.size(); ++i)
+    if (cloud.points[i].allFinite()) kept.push_back_from(cloud, i);
+  return kept;
+}
+
 }  // namespace
 
-SemanticEvaluation evaluate_semantic(const PointCloud& gt, const PointCloud& map,
+SemanticEvaluation evaluate_semantic(const PointCloud& gt_all, const PointCloud& map_all,
                                      const SemanticEvalOptions& options) {
-  if (gt.empty()) throw Error("ground truth", "no points");
+  size_t gt_dropped = 0, map_dropped = 0;
+  const PointCloud gt = finite_points(gt_all, gt_dropped);
+  const PointCloud map = finite_points(map_all, map_dropped);
+  if (gt.empty()) throw Error("ground truth", gt_dropped ? "no finite points (all have NaN/Inf coordinates)" : "no points");
+  if (map.empty() && map_dropped) throw Error("map", "no finite vertices (all have NaN/Inf coordinates)");
   if (!gt.has_labels() || gt.labels.size() != gt.size())
     throw Error("ground truth", "points carry no 'label' property");
   if (!(options.max_distance_m > 0.0) || !(options.completeness_distance_m > 0.0))
@@ -35,6 +50,8 @@ SemanticEvaluation evaluate_semantic(const PointCloud& gt, const PointCloud& map
   SemanticEvaluation result;
   result.gt_points = gt.size();
   result.map_vertices = map.size();
+  result.gt_points_non_finite = gt_dropped;
+  result.map_vertices_non_finite = map_dropped;
 
   const eval_detail::NearestNeighborIndex gt_index(gt.points);
   const eval_detail::NearestNeighborIndex map_index(map.points);
@@ -161,7 +178,9 @@ nlohmann::json to_json(const SemanticEvaluation& e) {
           {"gt_points_missed", e.gt_points_missed},
           {"map_vertices", e.map_vertices},
           {"map_vertices_labelled", e.map_vertices_labelled},
-          {"map_vertices_off_surface", e.map_vertices_off_surface}};
+          {"map_vertices_off_surface", e.map_vertices_off_surface},
+          {"gt_points_non_finite", e.gt_points_non_finite},
+          {"map_vertices_non_finite", e.map_vertices_non_finite}};
 }
 
 }  // namespace semap

@@ -44,7 +44,7 @@ AteResult compute_ate(const Trajectory& gt, const Trajectory& est, double max_dt
   const auto matches = associate_timestamps(timestamps_of(gt), timestamps_of(est), max_dt);
   if (matches.size() < 3)
     throw Error("ATE", "only " + std::to_string(matches.size()) +
-                           " poses associate within " + std::to_string(max_dt) +
+                           " poses associate within " + compact_number(max_dt) +
                            " s (need >= 3); are these the right files?");
 
   Eigen::Matrix3Xd est_positions(3, matches.size()), gt_positions(3, matches.size());
@@ -114,7 +114,13 @@ RpeResult compute_rpe(const Trajectory& gt, const Trajectory& est, double delta_
     rot_sum += rot;
     ++result.pairs;
   }
-  if (result.pairs > 0) {
+  if (result.pairs == 0) {
+    const double span = stamps.size() > 1 ? stamps.back() - stamps.front() : 0.0;
+    result.no_pairs_reason = stamps.size() < 2
+                                 ? std::to_string(stamps.size()) + " poses associate with the ground truth (need 2)"
+                                 : "no two associated poses are " + compact_number(delta_s) + " s apart (they span " +
+                                       compact_number(span) + " s)";
+  } else {
     const double n = static_cast<double>(result.pairs);
     result.trans_rmse_m_per_s = std::sqrt(trans_sq / n);
     result.rot_rmse_deg_per_s = std::sqrt(rot_sq / n);
@@ -134,6 +140,9 @@ nlohmann::json to_json(const AteResult& ate) {
 }
 
 nlohmann::json to_json(const RpeResult& rpe) {
+  if (rpe.pairs == 0)
+    return {{"trans_rmse_m_per_s", nullptr}, {"rot_rmse_deg_per_s", nullptr}, {"trans_mean_m_per_s", nullptr},
+            {"rot_mean_deg_per_s", nullptr}, {"pairs", 0}, {"reason", rpe.no_pairs_reason}};
   return {{"trans_rmse_m_per_s", rpe.trans_rmse_m_per_s},
           {"rot_rmse_deg_per_s", rpe.rot_rmse_deg_per_s},
           {"trans_mean_m_per_s", rpe.trans_mean_m_per_s},

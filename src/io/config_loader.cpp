@@ -4,11 +4,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
+#include <vector>
 
 #include "semap/core/error.hpp"
+#include "core/paths.hpp"
 
 namespace semap {
 namespace {
@@ -84,7 +86,7 @@ class YamlLoadVisitor : public ParamVisitor {
     try {
       v = n.as<T>();
     } catch (const YAML::Exception&) {
-      fail(key, std::string("must be ") + what + ", got '" + n.Scalar() + "'");
+      fail(key, std::string("must be ") + what + ", got '" + message_text(n.Scalar(), 80) + "'");
     }
     return true;
   }
@@ -159,13 +161,52 @@ class YamlDumpVisitor : public ParamVisitor {
 
 }  // namespace
 
-void load_config_string(const std::string& yaml, const std::string& source, const ParamTree& tree) {
-  YAML::Node root;
+namespace {
+
+std::string line_of(const std::string& source, const YAML::Mark& mark) {
+  return mark.line >= 0 ? source + ":" + std::to_string(mark.line + 1) : source;
+}
+
+// yaml-cpp keeps every pair of a map with a repeated key and returns the first: the second,
+// usually the one the user meant, would be ignored silently.
+void check_unique_keys(const YAML::Node& node, const std::string& source, int depth) {
+  if (depth > 64) throw Error(line_of(source, node.Mark()), "YAML nested more than 64 levels deep");
+  if (node.IsSequence()) {
+    for (const auto& item : node) check_unique_keys(item, source, depth + 1);
+  } else if (node.IsMap()) {
+    std::map<std::string, int> first_line;
+    for (const auto& kv : node) {
+      if (kv.first.IsScalar()) {
+        const auto [it, inserted] = first_line.emplace(kv.first.Scalar(), kv.first.Mark().line + 1);
+        if (!inserted)
+          throw Error(line_of(source, kv.first.Mark()), "duplicate key '" + message_text(kv.first.Scalar(), 80) +
+                                                            "' (first at line " + std::to_string(it->second) + ")");
+      }
+      check_unique_keys(kv.second, source, depth + 1);
+    }
+  }
+}
+
+}  // namespace
+
+YAML::Node parse_yaml_strict(const std::string& text, const std::string& source) {
+  const std::string_view body = std::string_view(text).substr(text.compare(0, 3, "\xEF\xBB\xBF") == 0 ? 3 : 0);
+  std::vector<YAML::Node> documents;
   try {
-    root = YAML::Load(yaml);
+    documents = YAML::LoadAll(std::string(body));
   } catch (const YAML::Exception& e) {
     throw Error(source, "malformed YAML: " + std::string(e.what()));
   }
+  if (documents.size() > 1)
+    throw Error(line_of(source, documents[1].Mark()),
+                "a second YAML document ('---'); the file must hold exactly one");
+  if (documents.empty()) return YAML::Node();
+  check_unique_keys(documents.front(), source, 0);
+  return documents.front();
+}
+
+void load_config_string(const std::string& yaml, const std::string& source, const ParamTree& tree) {
+  const YAML::Node root = parse_yaml_strict(yaml, source);
   if (root && !root.IsNull() && !root.IsMap()) throw Error(source, "config must be a YAML map");
   YamlLoadVisitor visitor(root, source, "");
   tree(visitor);
@@ -173,11 +214,7 @@ void load_config_string(const std::string& yaml, const std::string& source, cons
 }
 
 void load_config_file(const std::filesystem::path& yaml_path, const ParamTree& tree) {
-  std::ifstream in(yaml_path);
-  if (!in) throw Error(yaml_path, "cannot open config file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  load_config_string(ss.str(), yaml_path.string(), tree);
+  load_config_string(read_regular_file(yaml_path, kMaxTextFileBytes, "config file"), yaml_path.string(), tree);
 }
 
 std::string dump_config(const ParamTree& tree) {

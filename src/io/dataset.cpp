@@ -165,6 +165,8 @@ std::unique_ptr<DatasetReader> open_layout(const fs::path& root, const DatasetOp
   else if (layout == "synthetic") reader = io_detail::open_synthetic(root, y, options);
   else if (layout == "scannet") reader = io_detail::open_scannet(root, y);
   else throw Error(root / "dataset.yaml", "unknown format '" + layout + "' (tum, 7scenes, ycb, synthetic, scannet)");
+  if (reader->size() == 0) throw Error(root, "dataset has no frames");
+  validate_camera(reader->camera(), root.string());  // every layout; the readers name their camera file first
   return reader;
 }
 

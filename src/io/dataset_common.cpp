@@ -1,9 +1,15 @@
 // Helpers shared by the dataset layouts: TUM-style lists, ground-truth lookup, dataset.yaml.
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <cmath>
+#include <mutex>
+#include <set>
 
 #include "semap/core/error.hpp"
+#include "core/paths.hpp"
 #include "io/association.hpp"
+#include "semap/io/config_loader.hpp"
 #include "io/dataset_layouts.hpp"
 #include "io/text_util.hpp"
 
@@ -12,8 +18,7 @@ namespace semap::io_detail {
 namespace fs = std::filesystem;
 
 std::vector<ListEntry> read_list(const fs::path& path, size_t min_fields) {
-  if (!fs::exists(path)) throw Error(path, "list file not found");
-  const std::string text = read_file_bytes(path);
+  const std::string text = read_file_bytes(path, kMaxTextFileBytes, "list file");
   const std::string source = path.string();
   std::vector<ListEntry> entries;
   for_each_line(text, [&](std::string_view line, size_t line_no) {
@@ -22,7 +27,7 @@ std::vector<ListEntry> read_list(const fs::path& path, size_t min_fields) {
     if (fields.size() < 1 + min_fields)
       throw Error(where(source, line_no), "expected 'timestamp' and " + std::to_string(min_fields) + " more field(s)");
     const auto t = parse_double(fields[0]);
-    if (!t) throw Error(where(source, line_no), "malformed timestamp '" + std::string(fields[0]) + "'");
+    if (!t) throw Error(where(source, line_no), "malformed timestamp " + quoted_field(fields[0]));
     if (!std::isfinite(*t)) throw Error(where(source, line_no), "NaN or Inf timestamp");
     if (!entries.empty() && *t <= entries.back().timestamp)
       throw Error(where(source, line_no), *t == entries.back().timestamp ? "duplicate timestamp" : "timestamp not increasing");
@@ -33,12 +38,45 @@ std::vector<ListEntry> read_list(const fs::path& path, size_t min_fields) {
   return entries;
 }
 
+namespace {
+
+/// Lists name files relative to their folder. One outside it (absolute, or "../") is read as
+/// given, with one warning per list (README "Reliability"): associate.py output with absolute
+/// paths is common, and reading an image is harmless (regular files only, size-limited).
+void warn_if_outside(const fs::path& list, const fs::path& relative, size_t line) {
+  const fs::path normal = relative.lexically_normal();
+  if (!normal.is_absolute() && (normal.empty() || *normal.begin() != "..")) return;
+  static std::mutex mutex;
+  static std::set<std::string> warned;
+  const std::lock_guard<std::mutex> lock(mutex);
+  if (!warned.insert(list.string()).second) return;
+  spdlog::warn("{}: lists files outside the dataset folder (first: {}); they are read as given",
+               where(list.string(), line), message_text(relative.string()));
+}
+
+/// A hint when the name was split at spaces: the joined name exists.
+std::string space_hint(const fs::path& list, const ListEntry& entry, size_t field) {
+  std::string joined = entry.fields[field];
+  for (size_t k = field + 1; k < entry.fields.size(); ++k) {
+    joined += " " + entry.fields[k];
+    if (is_regular_file_path(list.parent_path() / joined))
+      return " (list fields are split at spaces and tabs: '" + message_text(joined) +
+             "' exists; rename it without spaces)";
+  }
+  return entry.fields.size() > field + 1 ? " (list fields are split at spaces and tabs: file names with spaces are not supported)" : "";
+}
+
+}  // namespace
+
 fs::path listed_file(const fs::path& list, const ListEntry& entry, size_t field) {
-  const fs::path file = list.parent_path() / entry.fields.at(field);
-  std::error_code ec;
-  if (!fs::is_regular_file(file, ec))
-    throw Error(where(list.string(), entry.line), "listed image " + file.string() + " not found");
-  return file;
+  const fs::path relative = entry.fields.at(field);
+  const fs::path file = list.parent_path() / relative;
+  warn_if_outside(list, relative, entry.line);
+  if (is_regular_file_path(file)) return file;
+  const std::string is = describe_path(file);
+  const std::string problem = is == "not found" ? "not found" : "is " + is + ", expected a regular file";
+  throw Error(where(list.string(), entry.line),
+              "listed image " + file.string() + " " + problem + (is == "not found" ? space_hint(list, entry, field) : ""));
 }
 
 std::optional<Pose> pose_at(const Trajectory& trajectory, double t, double max_dt) {
@@ -100,8 +138,26 @@ std::vector<FrameRecord> associate_lists(const fs::path& rgb_list, const fs::pat
   return records;
 }
 
-void attach_ground_truth(std::vector<FrameRecord>& records, const Trajectory& trajectory) {
+void attach_ground_truth(std::vector<FrameRecord>& records, const Trajectory& trajectory, const std::string& source) {
   for (auto& r : records) r.gt_T_world_camera = pose_at(trajectory, r.timestamp);
+  use_local_origin_if_far(records, source);
+}
+
+void use_local_origin_if_far(std::vector<FrameRecord>& records, const std::string& source) {
+  const Pose* first = nullptr;
+  double farthest = 0.0;
+  for (const auto& r : records) {
+    if (!r.gt_T_world_camera) continue;
+    if (!first) first = &*r.gt_T_world_camera;
+    farthest = std::max(farthest, r.gt_T_world_camera->translation().norm());
+  }
+  if (!first || farthest <= kMaxGroundTruthDistanceM) return;
+  const Eigen::Vector3d origin = first->translation();
+  spdlog::warn("{}: ground-truth positions lie up to {} m from the origin (georeferenced?); using a local origin: "
+               "the first pose's translation ({}, {}, {}) is subtracted from every ground-truth pose",
+               message_text(source), compact_number(farthest), origin.x(), origin.y(), origin.z());
+  for (auto& r : records)
+    if (r.gt_T_world_camera) r.gt_T_world_camera->translation() -= origin;
 }
 
 // ------------------------------------------------------------------ dataset.yaml
@@ -184,7 +240,7 @@ DatasetYaml read_dataset_yaml(const fs::path& file) {
   DatasetYaml yaml;
   yaml.file = file;
   try {
-    const YAML::Node root = YAML::LoadFile(file.string());
+    const YAML::Node root = parse_yaml_strict(read_file_bytes(file, kMaxTextFileBytes, "dataset.yaml"), file.string());
     if (!root.IsMap()) throw Error(file, "expected a map with 'format' and 'camera'");
     read_top_level(root, file, yaml);
   } catch (const YAML::Exception& e) {
@@ -200,6 +256,7 @@ void apply_yaml_camera(const DatasetYaml* yaml, CameraModel& camera) {
   } catch (const YAML::Exception& e) {
     throw Error(yaml->file, std::string("malformed camera section: ") + e.what());
   }
+  validate_camera(camera, yaml->file.string());
 }
 
 }  // namespace semap::io_detail

@@ -77,7 +77,15 @@ std::unique_ptr<DatasetReader> open_rosbag(const std::filesystem::path& bag, con
 /// frame timestamp = rgb timestamp; unmatched rgb frames are dropped.
 std::vector<FrameRecord> associate_lists(const std::filesystem::path& rgb_list,
                                          const std::filesystem::path& depth_list);
-/// Fills gt_T_world_camera of each record from a trajectory (pose_at).
-void attach_ground_truth(std::vector<FrameRecord>& records, const Trajectory& trajectory);
+/// Fills gt_T_world_camera of each record from a trajectory (pose_at), then
+/// use_local_origin_if_far(records, source).
+void attach_ground_truth(std::vector<FrameRecord>& records, const Trajectory& trajectory,
+                         const std::string& source = "ground truth");
+/// Ground-truth positions farther than this from the origin are taken as georeferenced.
+constexpr double kMaxGroundTruthDistanceM = 1000.0;
+/// Georeferenced ground truth (translations of 1e5 m: float maps lose all precision there):
+/// when any pose is farther than kMaxGroundTruthDistanceM from the origin, the first pose's
+/// translation is subtracted from every pose (a local origin), with one warning naming `source`.
+void use_local_origin_if_far(std::vector<FrameRecord>& records, const std::string& source);
 
 }  // namespace semap::io_detail

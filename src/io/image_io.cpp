@@ -6,6 +6,7 @@
 
 #include "semap/core/error.hpp"
 #include "core/paths.hpp"
+#include "io/image_header.hpp"
 #include "io/png_decoder.hpp"
 #include "io/text_util.hpp"
 
@@ -13,8 +14,18 @@ namespace semap {
 
 namespace {
 
-// Larger images are treated as corrupt headers (never needed for RGB-D frames).
+// Larger images are treated as corrupt or hostile headers (never needed for RGB-D frames):
+// 2^26 pixels (8192x8192) decode to at most 512 MiB even as 16-bit RGBA.
 constexpr uint64_t kMaxPixels = uint64_t{1} << 26;
+
+// The declared size of every format, before any decoder allocates (io/image_header.hpp).
+void check_declared_size(const std::filesystem::path& path, const std::string& bytes) {
+  const io_detail::ImageHeader header = io_detail::read_image_header(bytes, path.string());
+  if (header.width > kMaxPixels || header.height > kMaxPixels || header.width * header.height > kMaxPixels)
+    throw Error(path, std::string(header.format) + " header declares " + std::to_string(header.width) + "x" +
+                          std::to_string(header.height) + " pixels, more than the limit of " +
+                          std::to_string(kMaxPixels) + " (8192x8192): not decoded (corrupt or hostile header?)");
+}
 
 using io_detail::read_be32;
 
@@ -34,8 +45,6 @@ void check_container(const std::filesystem::path& path, const std::string& bytes
       if (length > n - pos - 12) throw Error(path, "truncated PNG (chunk '" + type + "' runs past the end)");
       if (first) {
         if (type != "IHDR" || length < 13) throw Error(path, "corrupt PNG (no IHDR)");
-        const uint64_t w = read_be32(b + pos + 8), h = read_be32(b + pos + 12);
-        if (w == 0 || h == 0 || w * h > kMaxPixels) throw Error(path, "corrupt PNG (implausible size)");
         first = false;
       }
       pos += 12 + length;
@@ -52,7 +61,7 @@ void check_container(const std::filesystem::path& path, const std::string& bytes
 
 cv::Mat decode_bytes(const std::filesystem::path& path, const std::string& bytes) {
   if (bytes.empty()) throw Error(path, "empty image file");
-  if (bytes.size() > (size_t{1} << 30)) throw Error(path, "image file larger than 1 GiB");
+  check_declared_size(path, bytes);
   check_container(path, bytes);
   if (auto fast = decode_png_fast(bytes)) return std::move(*fast);  // the common RGB-D layouts
   cv::Mat image;
@@ -66,7 +75,9 @@ cv::Mat decode_bytes(const std::filesystem::path& path, const std::string& bytes
   return image;
 }
 
-cv::Mat decode(const std::filesystem::path& path) { return decode_bytes(path, io_detail::read_file_bytes(path)); }
+cv::Mat decode(const std::filesystem::path& path) {
+  return decode_bytes(path, io_detail::read_file_bytes(path, kMaxImageFileBytes, "image"));
+}
 
 std::string size_text(cv::Size s) { return std::to_string(s.width) + "x" + std::to_string(s.height); }
 

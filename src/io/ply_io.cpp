@@ -267,7 +267,7 @@ void write_ply(const std::filesystem::path& path, const TriangleMesh& mesh) {
 }
 
 TriangleMesh read_ply(const std::filesystem::path& file) {
-  return parse_ply(io_detail::read_file_bytes(file), file.string());
+  return parse_ply(io_detail::read_file_bytes(file, kMaxMeshFileBytes, "PLY file"), file.string());
 }
 
 TriangleMesh parse_ply(const std::string& bytes, const std::string& path) {

@@ -88,9 +88,12 @@ std::unique_ptr<DatasetReader> open_7scenes(const fs::path& root, const DatasetY
     any_pose_file = true;
   }
   if (!any_pose_file && fs::exists(root / "groundtruth.txt"))
-    attach_ground_truth(records, read_tum_trajectory(root / "groundtruth.txt"));
+    attach_ground_truth(records, read_tum_trajectory(root / "groundtruth.txt"), (root / "groundtruth.txt").string());
+  if (any_pose_file) use_local_origin_if_far(records, (root / "frame-*.pose.txt").string());
 
   CameraModel camera = read_intrinsics(root);
+  if (!(yaml && yaml->camera) && fs::exists(root / "camera-intrinsics.txt"))
+    validate_camera(camera, (root / "camera-intrinsics.txt").string());
   apply_yaml_camera(yaml, camera);
   return std::make_unique<LayoutDataset>("7scenes", root, camera, std::move(records));
 }

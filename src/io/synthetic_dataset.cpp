@@ -38,7 +38,8 @@ std::unique_ptr<DatasetReader> open_synthetic(const fs::path& root, const Datase
   // Clean label lists are optional; asking for the noisy ones makes them required.
   if (options.noisy_labels || fs::exists(labels)) attach_list(records, labels, &FrameRecord::labels);
   if (options.noisy_labels || fs::exists(instances)) attach_list(records, instances, &FrameRecord::instances);
-  if (fs::exists(root / "groundtruth.txt")) attach_ground_truth(records, read_tum_trajectory(root / "groundtruth.txt"));
+  if (fs::exists(root / "groundtruth.txt"))
+    attach_ground_truth(records, read_tum_trajectory(root / "groundtruth.txt"), (root / "groundtruth.txt").string());
   CameraModel camera;
   apply_yaml_camera(yaml, camera);
   return std::make_unique<LayoutDataset>("synthetic", root, camera, std::move(records));

@@ -1,24 +1,19 @@
 #include "io/text_util.hpp"
 
 #include <charconv>
-#include <fstream>
-#include <sstream>
 
 #include "semap/core/error.hpp"
+#include "core/paths.hpp"
 
 namespace semap::io_detail {
 
-std::string read_file_bytes(const std::filesystem::path& path) {
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw Error(path, "file not found");
-  if (std::filesystem::is_directory(path, ec)) throw Error(path, "is a folder, expected a file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path, "cannot open for reading");
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  if (in.bad()) throw Error(path, "read failed");
-  return buffer.str();
+std::string read_file_bytes(const std::filesystem::path& path, uint64_t max_bytes, std::string_view what) {
+  return read_regular_file(path, max_bytes, what);
 }
+
+size_t utf8_bom_length(std::string_view text) { return text.substr(0, 3) == "\xEF\xBB\xBF" ? 3 : 0; }
+
+std::string quoted_field(std::string_view field) { return "'" + message_text(field, 40) + "'"; }
 
 std::vector<std::string_view> split_fields(std::string_view line) {
   std::vector<std::string_view> fields;
@@ -51,13 +46,13 @@ bool is_blank_or_comment(std::string_view line) {
 }
 
 std::vector<double> read_numbers(const std::filesystem::path& path) {
-  const std::string text = read_file_bytes(path);
+  const std::string text = read_file_bytes(path, kMaxTextFileBytes, "number file");
   std::vector<double> numbers;
   for_each_line(text, [&](std::string_view line, size_t line_no) {
     if (is_blank_or_comment(line)) return;
     for (auto f : split_fields(line)) {
       const auto v = parse_double(f);
-      if (!v) throw Error(where(path.string(), line_no), "malformed number '" + std::string(f.substr(0, 40)) + "'");
+      if (!v) throw Error(where(path.string(), line_no), "malformed number " + quoted_field(f));
       numbers.push_back(*v);
     }
   });

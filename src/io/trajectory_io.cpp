@@ -26,7 +26,7 @@ Trajectory parse_tum_trajectory(const std::string& text, const std::string& sour
     double v[8];
     for (int k = 0; k < 8; ++k) {
       const auto value = parse_double(fields[k]);
-      if (!value) throw Error(where(source, line_no), "malformed number '" + std::string(fields[k]) + "'");
+      if (!value) throw Error(where(source, line_no), "malformed number " + quoted_field(fields[k]));
       if (!std::isfinite(*value)) throw Error(where(source, line_no), "NaN or Inf value");
       v[k] = *value;
     }
@@ -43,7 +43,7 @@ Trajectory parse_tum_trajectory(const std::string& text, const std::string& sour
 }
 
 Trajectory read_tum_trajectory(const std::filesystem::path& path) {
-  return parse_tum_trajectory(io_detail::read_file_bytes(path), path.string());
+  return parse_tum_trajectory(io_detail::read_file_bytes(path, kMaxTextFileBytes, "trajectory file"), path.string());
 }
 
 void write_tum_trajectory(const std::filesystem::path& path, const Trajectory& trajectory) {

@@ -53,7 +53,8 @@ std::unique_ptr<DatasetReader> open_tum(const fs::path& root, const DatasetYaml*
     }
     camera = tum_camera_preset(freiburg);
   }
-  if (fs::exists(root / "groundtruth.txt")) attach_ground_truth(records, read_tum_trajectory(root / "groundtruth.txt"));
+  if (fs::exists(root / "groundtruth.txt"))
+    attach_ground_truth(records, read_tum_trajectory(root / "groundtruth.txt"), (root / "groundtruth.txt").string());
   return std::make_unique<LayoutDataset>("tum", root, camera, std::move(records));
 }
 

@@ -64,7 +64,7 @@ CameraModel read_camera(const fs::path& base, const fs::path& frames) {
   camera.depth_scale = 10000.0;
   const fs::path derived = base / "derived" / "intrinsics.txt";
   if (fs::exists(derived)) {
-    const std::string text = read_file_bytes(derived);
+    const std::string text = read_file_bytes(derived, kMaxTextFileBytes, "intrinsics file");
     for_each_line(text, [&](std::string_view line, size_t line_no) {
       if (is_blank_or_comment(line)) return;
       const auto f = split_fields(line);
@@ -76,6 +76,7 @@ CameraModel read_camera(const fs::path& base, const fs::path& frames) {
       else if (f[0] == "cy") camera.depth.cy = *v;
       else if (f[0] == "factor_depth") camera.depth_scale = *v;
     });
+    validate_camera(camera, derived.string());
     return camera;
   }
   // Videos 0000-0059 were taken with asus-uw, 0060-0091 with asus-cmu; camera[0] is colour.
@@ -83,7 +84,7 @@ CameraModel read_camera(const fs::path& base, const fs::path& frames) {
   const fs::path json_file = base / "cameras" / (video >= 60 ? "asus-cmu.json" : "asus-uw.json");
   if (!fs::exists(json_file)) return camera;
   try {
-    const auto json = nlohmann::json::parse(read_file_bytes(json_file));
+    const auto json = nlohmann::json::parse(read_file_bytes(json_file, kMaxTextFileBytes, "camera file"));
     const auto& model = json.at("rig").at("camera").at(0).at("camera_model");
     const auto params = model.at("params").get<std::vector<double>>();
     if (params.size() < 4) throw Error(json_file, "camera params need fu fv u0 v0");
@@ -91,6 +92,7 @@ CameraModel read_camera(const fs::path& base, const fs::path& frames) {
   } catch (const nlohmann::json::exception& e) {
     throw Error(json_file, std::string("malformed camera JSON: ") + e.what());
   }
+  validate_camera(camera, json_file.string());
   return camera;
 }
 
@@ -98,7 +100,7 @@ CameraModel read_camera(const fs::path& base, const fs::path& frames) {
 /// [R|t] of meta.mat (checked: inverse(RT) * object pose is constant over frames).
 std::map<int, Pose> read_camera_poses(const fs::path& file) {
   std::map<int, Pose> poses;
-  const std::string text = read_file_bytes(file);
+  const std::string text = read_file_bytes(file, kMaxTextFileBytes, "pose file");
   for_each_line(text, [&](std::string_view line, size_t line_no) {
     if (is_blank_or_comment(line)) return;
     const auto f = split_fields(line);
@@ -142,6 +144,7 @@ std::unique_ptr<DatasetReader> open_ycb(const fs::path& root, const DatasetYaml*
     if (auto it = poses.find(number); it != poses.end()) r.gt_T_world_camera = it->second;
     records.push_back(std::move(r));
   }
+  use_local_origin_if_far(records, pose_file.string());
   CameraModel camera = read_camera(base, frames);
   apply_yaml_camera(yaml, camera);
   return std::make_unique<YcbDataset>("ycb", root, camera, std::move(records));

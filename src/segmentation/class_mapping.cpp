@@ -4,10 +4,11 @@
 
 #include <algorithm>
 #include <cctype>
-#include <fstream>
+#include <sstream>
 #include <unordered_map>
 
 #include "semap/core/error.hpp"
+#include "core/paths.hpp"
 #include "semap/segmentation/segmentation_config.hpp"
 
 namespace semap {
@@ -99,8 +100,7 @@ const std::vector<std::string>& voc21_class_names() {
 }
 
 std::vector<std::string> read_class_names(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw Error(path, "cannot open class names file");
+  std::istringstream in(read_regular_file(path, kMaxTextFileBytes, "class names file"));
   std::vector<std::string> names;
   std::string line;
   while (std::getline(in, line)) {

@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "semap/core/error.hpp"
+#include "core/paths.hpp"
 #include "io/image_io.hpp"
 #include "segmentation/class_mapping.hpp"
 #include "segmentation/segmentation_utils.hpp"
@@ -95,10 +96,9 @@ SegmentationResult PrecomputedSegmenter::read(const std::string& name) const {
   const auto inst_path = dir_ / (name + ".instances.png");
   nlohmann::json j;
   {
-    std::ifstream in(json_path);
-    if (!in) throw Error(json_path, "cannot open precomputed segmentation");
+    const std::string text = read_regular_file(json_path, kMaxTextFileBytes, "precomputed segmentation");
     try {
-      j = nlohmann::json::parse(in);
+      j = nlohmann::json::parse(text);
     } catch (const std::exception& e) {
       throw Error(json_path, std::string("malformed JSON: ") + e.what());
     }

@@ -5,6 +5,7 @@
 #include <set>
 
 #include "semap/core/error.hpp"
+#include "core/paths.hpp"
 
 namespace semap {
 namespace {
@@ -113,9 +114,8 @@ std::string parse_initializer_name(Reader r) {
 }  // namespace
 
 OnnxModelInfo read_onnx_model_info(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path, "cannot open model file");
-  const std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // Regular files only, size-limited (a folder or FIFO is one clear error, issue 22).
+  const std::string data = read_regular_file(path, kMaxModelFileBytes, "model file");
   if (data.empty()) throw Error(path, "model file is empty");
 
   Reader model{reinterpret_cast<const uint8_t*>(data.data()), reinterpret_cast<const uint8_t*>(data.data()) + data.size()};

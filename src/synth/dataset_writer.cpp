@@ -1,5 +1,5 @@
-// generate_dataset(): the synthetic dataset of notes/SHARED_FORMATS.md, written into a
-// temporary sibling folder that is renamed to the target at the very end.
+// generate_dataset(): the synthetic dataset of notes/SHARED_FORMATS.md, written into a staging
+// folder inside the target and published at the very end (io/output_folder.hpp).
 #include <fmt/format.h>
 #include <tbb/parallel_invoke.h>
 #include <unistd.h>
@@ -14,6 +14,7 @@
 #include "core/paths.hpp"
 #include "core/progress.hpp"
 #include "io/image_io.hpp"
+#include "io/output_folder.hpp"
 #include "semap/io/ply_io.hpp"
 #include "semap/io/trajectory_io.hpp"
 #include "synth/depth_noise.hpp"
@@ -93,24 +94,17 @@ std::string scene_json(const SyntheticScene& scene, const SynthConfig& cfg) {
 
 std::string frame_name(int i) { return fmt::format("{:06d}.png", i); }
 
-void check_output_folder(const fs::path& out) {
-  if (!fs::exists(out)) return;
-  if (!fs::is_directory(out)) throw Error(out, "exists and is not a folder");
-  if (!fs::is_empty(out) && !fs::exists(out / "dataset.yaml"))
-    throw Error(out, "exists, is not empty and is not a dataset; refusing to overwrite it");
-}
-
 }  // namespace
 
 SynthStats generate_dataset(const SynthConfig& cfg, const fs::path& out_dir) {
   cfg.validate();
   if (out_dir.empty()) throw Error("synth", "no output folder given");
-  const fs::path out = fs::absolute(out_dir).lexically_normal();
-  const fs::path target = out.filename().empty() ? out.parent_path() : out;
-  check_output_folder(target);
-  fs::create_directories(target.parent_path());
-  const fs::path tmp = target.parent_path() / (target.filename().string() + ".partial-" + std::to_string(getpid()));
-  fs::remove_all(tmp);
+  // A new or empty folder, or one an earlier `semap synth` made (io/output_folder.hpp): never a
+  // folder of someone else's data. Everything is staged inside it and published at the end;
+  // files of an earlier, larger dataset there are removed, nothing else is.
+  OutputFolder folder(out_dir, {.tool = "synth", .refuse_foreign_non_empty = true, .remove_stale = true,
+                                .publish_last = {"dataset.yaml"}});
+  const fs::path tmp = folder.staging();
   const bool noisy_seg = cfg.seg_noise > 0;
   for (const char* sub : {"rgb", "depth", "label", "instance"}) fs::create_directories(tmp / sub);
   if (noisy_seg)
@@ -143,6 +137,7 @@ SynthStats generate_dataset(const SynthConfig& cfg, const fs::path& out_dir) {
     double render_s = 0, render_cpu_s = 0;
     const auto start = Clock::now();
     for (int i = 0; i < cfg.frames; ++i) {
+      throw_if_interrupted();
       const Pose& pose = traj[i].T_world_camera;
       const auto t0 = Clock::now();
       const std::clock_t c0 = std::clock();
@@ -190,13 +185,13 @@ SynthStats generate_dataset(const SynthConfig& cfg, const fs::path& out_dir) {
     write_file_atomic(tmp / "scene.json", scene_json(scene, cfg));
     const PointCloud kept = select_points(samples, observed);
     write_ply(tmp / "gt_points.ply", kept);
-    // dataset.yaml last inside the temp folder: its presence marks a complete dataset.
+    // dataset.yaml is published last: its presence marks a complete dataset.
     write_file_atomic(tmp / "dataset.yaml",
                       fmt::format("format: synthetic\ncamera: {{fx: {}, fy: {}, cx: {}, cy: {}, width: {}, height: {}, "
                                   "depth_scale: 5000}}\n",
                                   K.fx, K.fy, K.cx, K.cy, K.width, K.height));
-    if (fs::exists(target)) fs::remove_all(target);
-    fs::rename(tmp, target);
+    throw_if_interrupted();
+    folder.publish();
 
     SynthStats stats;
     stats.render_fps = cfg.frames / std::max(render_s, 1e-9);
@@ -206,10 +201,8 @@ SynthStats generate_dataset(const SynthConfig& cfg, const fs::path& out_dir) {
     stats.objects = scene.objects.size();
     progress.finish(fmt::format("render {:.1f} fps", stats.render_fps));
     return stats;
-  } catch (...) {
-    std::error_code ec;
-    fs::remove_all(tmp, ec);
-    throw;
+  } catch (const fs::filesystem_error& e) {
+    throw Error(e.path1().empty() ? out_dir : e.path1(), e.code().message());
   }
 }
 

@@ -79,11 +79,7 @@ void save_map(const TsdfMap& map, const std::filesystem::path& path) {
 }
 
 TsdfMap load_map(const std::filesystem::path& path, const TsdfConfig& base) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path, "cannot open map file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const std::string bytes = ss.str();
+  const std::string bytes = read_regular_file(path, kMaxMeshFileBytes, "map file");
   if (bytes.size() < 8 + 8 + 8 || std::memcmp(bytes.data(), kMagic, 8) != 0)
     throw Error(path, "not a semap map file (bad magic or truncated)");
   Reader r{bytes, 8, path};

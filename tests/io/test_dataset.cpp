@@ -168,8 +168,9 @@ TEST(Datasets, GeneratedTumFolderWithPresetFromName) {
   test::TempDir tmp;
   const fs::path dir = tmp / "rgbd_dataset_freiburg2_desk";
   write_tum_folder(dir, 4);
-  // Depth lists are 4 ms after colour: associated; a yaml sets the 64x48 camera size.
-  test::write_text(dir / "dataset.yaml", "camera: {width: 64, height: 48}\n");
+  // Depth lists are 4 ms after colour: associated; a yaml sets the 64x48 camera size (and a
+  // principal point inside it: the preset's cx 318.6 lies outside a 64-pixel image, issue 22).
+  test::write_text(dir / "dataset.yaml", "camera: {width: 64, height: 48, cx: 32, cy: 24}\n");
   auto reader = open_dataset(dir);
   ASSERT_EQ(reader->size(), 4u);
   EXPECT_DOUBLE_EQ(reader->camera().depth.fx, 517.3);  // yaml over the default preset

@@ -15,58 +15,19 @@
 #include <sstream>
 
 #include "io/image_io.hpp"
-#include "test_support.hpp"
+#include "reliability/reliability_support.hpp"
 
 namespace semap {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-void spit(const fs::path& p, const std::string& bytes) { std::ofstream(p, std::ios::binary | std::ios::trunc) << bytes; }
-
-/// Lines of a TUM-style list without comments.
-std::vector<std::string> data_lines(const fs::path& list) {
-  std::vector<std::string> out;
-  std::istringstream in(slurp(list));
-  for (std::string line; std::getline(in, line);)
-    if (!line.empty() && line[0] != '#') out.push_back(line);
-  return out;
-}
-std::string join_lines(const std::vector<std::string>& lines) {
-  std::string s;
-  for (const auto& l : lines) s += l + "\n";
-  return s;
-}
-/// The file named by field `field` (after the timestamp) of data line k of a list.
-fs::path listed(const fs::path& list, size_t k, size_t field = 1) {
-  std::istringstream in(data_lines(list).at(k));
-  std::string tok;
-  for (size_t i = 0; i <= field; ++i) in >> tok;
-  return list.parent_path() / tok;
-}
-
-std::string sh_quote(const fs::path& p) { return "'" + p.string() + "'"; }
-
-/// Lines of the output that start with "semap: error:".
-size_t error_lines(const std::string& output) {
-  size_t n = 0;
-  std::istringstream in(output);
-  for (std::string line; std::getline(in, line);)
-    if (line.rfind("semap: error:", 0) == 0) ++n;
-  return n;
-}
-
-::testing::AssertionResult no_crash_report(const std::string& output) {
-  for (const char* bad : {"Sanitizer", "runtime error:", "terminate called", "Segmentation fault", "Aborted", "core dumped"})
-    if (output.find(bad) != std::string::npos) return ::testing::AssertionFailure() << "crash/sanitizer report:\n" << output;
-  return ::testing::AssertionSuccess();
-}
+using test::data_lines;
+using test::error_lines;
+using test::join_lines;
+using test::listed;
+using test::no_crash_report;
+using test::slurp;
+using test::spit;
 
 class BadInputCli : public ::testing::Test {
  protected:
@@ -83,11 +44,7 @@ class BadInputCli : public ::testing::Test {
   static fs::path clean() { return tmp_->path() / "clean"; }
 
   /// Runs `semap ARGS...` with a 120 s limit (a hang fails as exit 124).
-  static test::CommandResult semap(const std::vector<std::string>& args) {
-    std::string cmd = "timeout 120 " + sh_quote(test::semap_executable());
-    for (const auto& a : args) cmd += " " + sh_quote(a);
-    return test::run_command(cmd);
-  }
+  static test::CommandResult semap(const std::vector<std::string>& args) { return test::run_semap(args); }
 
   /// A copy of the clean dataset named `name`, changed by `mutate`.
   static fs::path broken_copy(const std::string& name, const std::function<void(const fs::path&)>& mutate) {

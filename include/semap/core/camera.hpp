@@ -3,6 +3,7 @@
 // metres; the raw 16-bit scale lives here only so io/ can convert.
 #include <Eigen/Core>
 #include <optional>
+#include <string>
 
 #include "semap/core/pose.hpp"
 
@@ -43,5 +44,22 @@ struct CameraModel {
 
   const PinholeIntrinsics& colour_intrinsics() const { return colour ? colour->intrinsics : depth; }
 };
+
+/// Physical ranges of a camera (issue 22: PCL aborts on cx = 1e12, cx = 1e6 takes 3.6 GB).
+struct CameraLimits {
+  static constexpr int kMinSize = 8, kMaxSize = 16384;            ///< width, height [px]
+  static constexpr double kMaxPixels = double(1 << 26);           ///< width * height (the image decoder's cap)
+  static constexpr double kMinFocalPerSize = 0.05;                ///< fx / width, fy / height: ~170 deg field of view
+  static constexpr double kMaxFocalPerSize = 50.0;                ///< ~1.1 deg field of view
+  static constexpr double kMinDepthScale = 1.0, kMaxDepthScale = 1e5;  ///< raw units per metre (1 m .. 10 um)
+  static constexpr double kMaxColourBaseline = 1.0;               ///< |t| of T_depth_colour [m]
+};
+
+/// Throws semap::Error(source, "camera KEY = VALUE ...: WHY") unless every magnitude is inside
+/// CameraLimits: sizes, finite focal lengths within [0.05, 50] x the image size, the principal
+/// point inside the image (0 <= cx <= width, 0 <= cy <= height), the depth scale, and for a
+/// separate colour camera its intrinsics and a rigid T_depth_colour with a baseline under 1 m.
+/// `source` names the file the camera came from (dataset.yaml, camera-intrinsics.txt).
+void validate_camera(const CameraModel& camera, const std::string& source);
 
 }  // namespace semap

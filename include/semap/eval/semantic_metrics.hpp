@@ -52,14 +52,18 @@ struct SemanticEvaluation {
   double completeness = 0.0;  ///< fraction of GT points with a map vertex within the distance
   size_t gt_points = 0, gt_points_labelled = 0, gt_points_missed = 0;
   size_t map_vertices = 0, map_vertices_labelled = 0, map_vertices_off_surface = 0;
+  /// Points with a NaN/Inf coordinate, excluded from everything above (counted, not fatal:
+  /// one broken vertex must not turn the surface error into inf).
+  size_t gt_points_non_finite = 0, map_vertices_non_finite = 0;
   /// Combined normalised confusion, (kNumClasses+1)^2 row-major: rows = GT class (row
   /// kNumClasses: "no GT surface nearby"), columns = map class (column kNumClasses: "no map
   /// vertex nearby"). Row 0 (GT unlabelled) stays empty.
   std::vector<double> confusion;
 };
 
-/// Both clouds need points; `gt` needs labels (throws semap::Error otherwise). A map without
-/// labels counts as entirely unlabelled (every GT class gets IoU 0).
+/// Both clouds need finite points; `gt` needs labels (throws semap::Error otherwise). Points
+/// with a non-finite coordinate are dropped first and counted. A map without labels counts as
+/// entirely unlabelled (every GT class gets IoU 0).
 SemanticEvaluation evaluate_semantic(const PointCloud& gt, const PointCloud& map_vertices,
                                      const SemanticEvalOptions& options = {});
 /// Reads gt_points.ply and the map mesh/cloud PLY (its vertices), then evaluate_semantic.

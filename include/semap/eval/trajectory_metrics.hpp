@@ -2,6 +2,7 @@
 // Trajectory metrics with the TUM RGB-D benchmark's definitions (METHODS.md D):
 // ATE as in evaluate_ate.py, RPE as in evaluate_rpe.py (fixed delta in seconds).
 #include <cstddef>
+#include <string>
 
 #include <nlohmann/json.hpp>
 
@@ -30,6 +31,9 @@ struct RpeResult {
   double trans_mean_m_per_s = 0.0;
   double rot_mean_deg_per_s = 0.0;
   size_t pairs = 0;
+  /// Why no pair qualified (pairs == 0): the rates are then undefined, not 0 (a perfect score);
+  /// to_json writes them as null with this reason.
+  std::string no_pairs_reason;
 };
 
 /// Pairs (evaluate_rpe.py --fixed_delta --delta 1 --delta_unit s, made deterministic):
@@ -43,7 +47,8 @@ struct RpeResult {
 ///   translational error |t(E)| and rotation angle of E are divided by the pair's elapsed
 ///   est time t_j - t_i, giving m/s and deg/s (equal to the benchmark's per-delta figures
 ///   for delta = 1 s up to the sampling jitter).
-/// Returns pairs = 0 and zero rates when no pair qualifies (sequence shorter than delta).
+/// Returns pairs = 0, zero rates and no_pairs_reason when no pair qualifies (sequence shorter
+/// than delta).
 RpeResult compute_rpe(const Trajectory& gt, const Trajectory& est, double delta_s = 1.0,
                       double max_dt = 0.02);
 
