@@ -44,14 +44,15 @@ class Assigner : public semap::ParamVisitor {
   void param(std::string_view, bool& v, std::string_view, std::string_view) override {
     if (const uint8_t b = in_.byte(); b & 1) v = b & 2;
   }
-  void param(std::string_view, int& v, std::string_view, std::string_view) override {
+  void param(std::string_view, int& v, std::string_view, std::string_view, semap::ParamRange<int>) override {
     static const int kExtremes[] = {0, -1, 1, 2, INT_MAX, INT_MIN, 65536, 1 << 30, -65536};
     const uint8_t choice = in_.byte() % 4;
     if (choice == 1) v = kExtremes[in_.byte() % std::size(kExtremes)];
     else if (choice == 2) v = in_.raw<int32_t>();
     else if (choice == 3) v = static_cast<int8_t>(in_.byte());
   }
-  void param(std::string_view, double& v, std::string_view, std::string_view) override {
+  void param(std::string_view, double& v, std::string_view, std::string_view,
+             semap::ParamRange<double>) override {
     static const double kExtremes[] = {0.0, -0.0, 1.0, -1.0, 0.5, 1e-9, 1e-300, 5e-324, 1e300, DBL_MAX, -DBL_MAX,
                                        1e6, 1e-6, 65535.0, 2147483648.0, 1e12, -1e12};
     const uint8_t choice = in_.byte() % 4;
@@ -67,6 +68,11 @@ class Assigner : public semap::ParamVisitor {
     if (in_.byte() % 2 == 0) return;
     v.clear();
     for (uint8_t n = in_.byte() % 24; n > 0; --n) v.push_back(static_cast<char>(0x20 + in_.byte() % 95));
+  }
+  // A choice keeps its value or takes any of its names (an invalid name comes from strings).
+  void choice(std::string_view, std::string& v, std::span<const std::string_view> choices,
+              std::string_view) override {
+    if (const uint8_t b = in_.byte(); b & 1) v = std::string(choices[(b >> 1) % choices.size()]);
   }
   void section(std::string_view, std::string_view, const std::function<void(ParamVisitor&)>& body) override {
     body(*this);

@@ -2,6 +2,7 @@
 #include <cstdio>
 
 #include "apps/semap/commands.hpp"
+#include "io/output_folder.hpp"
 #include "semap/pipeline/run_pipeline.hpp"
 #include "pipeline/report.hpp"
 #include "synth/synth_config.hpp"
@@ -22,11 +23,12 @@ void add_demo_command(CLI::App& app, CommandRunner& run) {
   cmd->add_option("--out", args->out, "output folder (the dataset goes to OUT/dataset)");
   cmd->add_option("--frames", args->frames, "frames of the synthetic loop")->check(CLI::Range(10, 100000));
   cmd->add_option("--seed", args->seed, "scene seed");
-  cmd->add_option("--seg-noise", args->seg_noise, "label flicker rate of the built-in noisy segmenter")->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--seg-noise", args->seg_noise, "label flicker rate of the built-in noisy segmenter")->check(finite_in(0.0, 1.0));
   cmd->add_option("--config", args->config_path, "YAML config (see `semap config --dump`)");
   cmd->callback([&run, args] {
     run = [args]() -> int {
       const auto t0 = std::chrono::steady_clock::now();
+      const InterruptGuard interrupts;  // Ctrl-C: see `semap run`
       SemapConfig config = load_semap_config(args->config_path);
       SynthConfig synth;
       synth.frames = args->frames;
@@ -44,6 +46,7 @@ void add_demo_command(CLI::App& app, CommandRunner& run) {
       options.poses = PoseSource::track;
       options.segmenter = "groundtruth";
       options.seg_noise = args->seg_noise;
+      options.stop_requested = [] { return interrupt_signal() != 0; };
       const RunResult result = run_pipeline(options, config);
       std::fputs(summary_table(to_json(result)).c_str(), stdout);
       const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

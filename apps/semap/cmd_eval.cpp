@@ -35,20 +35,6 @@ void require_file(const std::string& path, const char* flag) {
   require_regular_file(path, std::string(flag) + " file");
 }
 
-/// CLI11's Range lets NaN through (every comparison with NaN is false): finite numbers only.
-CLI::Validator finite_in(double lo, double hi) {
-  const std::string range = "[" + compact_number(lo) + ", " + compact_number(hi) + "]";
-  return CLI::Validator(
-      [lo, hi, range](std::string& text) -> std::string {
-        char* end = nullptr;
-        const double v = std::strtod(text.c_str(), &end);
-        if (end == text.c_str() || *end != '\0' || !std::isfinite(v) || v < lo || v > hi)
-          return "must be a finite number in " + range + ", got '" + message_text(text, 40) + "'";
-        return {};
-      },
-      "FINITE in " + range);
-}
-
 void print_json(const nlohmann::json& j) { std::printf("%s\n", j.dump(2).c_str()); }
 
 int run_ate(const EvalOptions& o) {

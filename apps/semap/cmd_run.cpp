@@ -1,6 +1,7 @@
 #include <cstdio>
 
 #include "apps/semap/commands.hpp"
+#include "io/output_folder.hpp"
 #include "pipeline/report.hpp"
 #include "semap/pipeline/run_pipeline.hpp"
 
@@ -29,8 +30,8 @@ void add_run_command(CLI::App& app, CommandRunner& run) {
                   "yolo:MODEL | semantic:MODEL | groundtruth | precomputed:DIR | none (default: the config's "
                   "segmentation.segmenter, none = geometry and colour only)");
   cmd->add_option("--seg-noise", args->options.seg_noise, "simulate an imperfect segmenter on ground-truth labels (flicker rate 0..1)")
-      ->check(finite_range(0.0, 1.0));
-  cmd->add_option("--voxel", args->voxel, "TSDF voxel size in metres (overrides the config)")->check(finite_range(0.001, 1.0));
+      ->check(finite_in(0.0, 1.0));
+  cmd->add_option("--voxel", args->voxel, "TSDF voxel size in metres (overrides the config)")->check(finite_in(0.001, 1.0));
   cmd->add_option("--max-frames", args->max_frames, "stop after N frames (0 = all)")->check(CLI::Range(int64_t{0}, int64_t{1} << 40));
   cmd->add_option("--threads", args->threads, "worker threads (overrides the config; 1 = deterministic)")->check(CLI::Range(1, 256));
   cmd->add_flag("--no-eval", [args](int64_t) { args->options.evaluate = false; }, "skip evaluation against ground truth");
@@ -41,7 +42,13 @@ void add_run_command(CLI::App& app, CommandRunner& run) {
       if (args->threads > 0) config.pipeline.threads = args->threads;
       config.validate();
       args->options.max_frames = static_cast<size_t>(args->max_frames);
+      // First Ctrl-C: stop reading, finish the map and publish it; a second one quits and
+      // publishes nothing (io/output_folder.hpp).
+      const InterruptGuard interrupts;
+      args->options.stop_requested = [] { return interrupt_signal() != 0; };
       const RunResult result = run_pipeline(args->options, config);
+      if (result.stopped_early)
+        std::fprintf(stderr, "semap run: interrupted: mapped the %zu frames read so far\n", result.frames_read);
       std::fputs(summary_table(to_json(result)).c_str(), stdout);
       std::printf("outputs in %s\n", args->options.out_dir.string().c_str());
       return 0;

@@ -3,10 +3,12 @@
 // after parsing and returns the exit code.
 #include <CLI/CLI.hpp>
 #include <cmath>
+#include <cstdlib>
 #include <functional>
 #include <map>
 #include <string>
 
+#include "semap/core/error.hpp"
 #include "semap/core/params.hpp"
 
 namespace semap::app {
@@ -32,16 +34,18 @@ CLI::Option* add_enum_option(CLI::App* cmd, const std::string& name, E& value, c
       ->transform(CLI::CheckedTransformer(table, CLI::ignore_case));
 }
 
-/// A finite number in [min, max] (CLI11's Range lets NaN through).
-inline CLI::Validator finite_range(double min, double max) {
+/// A finite number in [lo, hi] (CLI11's Range and PositiveNumber let NaN through).
+inline CLI::Validator finite_in(double lo, double hi) {
+  const std::string range = "[" + compact_number(lo) + ", " + compact_number(hi) + "]";
   return CLI::Validator(
-      [min, max](std::string& text) -> std::string {
-        double v = 0;
-        if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v) || v < min || v > max)
-          return "must be a number in [" + format_number(min) + ", " + format_number(max) + "], got '" + text + "'";
+      [lo, hi, range](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || *end != '\0' || !std::isfinite(v) || v < lo || v > hi)
+          return "must be a finite number in " + range + ", got '" + message_text(text, 40) + "'";
         return {};
       },
-      "[" + format_number(min) + ", " + format_number(max) + "]");
+      "FINITE in " + range);
 }
 
 }  // namespace semap::app

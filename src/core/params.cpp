@@ -1,15 +1,13 @@
 #include "semap/core/params.hpp"
 
-#include <fmt/format.h>
-
 #include <algorithm>
 
-#include "semap/core/error.hpp"
+#include "semap/core/error.hpp"  // compact_number
 
 namespace semap {
 namespace {
 
-std::string number(double v) { return format_number(v); }
+std::string number(double v) { return compact_number(v); }
 std::string number(int v) { return std::to_string(v); }
 
 template <class T>
@@ -32,7 +30,7 @@ class RangeCheckVisitor : public ParamVisitor {
   }
   void param(std::string_view key, double& v, std::string_view, std::string_view,
              ParamRange<double> range) override {
-    if (!range.contains(v)) fail(key, "must be " + in(describe(range)) + ", got " + format_number(v));
+    if (!range.contains(v)) fail(key, "must be " + in(describe(range)) + ", got " + compact_number(v));
   }
   void param(std::string_view, std::string&, std::string_view, std::string_view) override {}
   void choice(std::string_view key, std::string& v, std::span<const std::string_view> choices,
@@ -64,8 +62,6 @@ class RangeCheckVisitor : public ParamVisitor {
 
 std::string describe(const ParamRange<double>& range) { return describe_range(range); }
 std::string describe(const ParamRange<int>& range) { return describe_range(range); }
-
-std::string format_number(double value) { return fmt::format("{:.6g}", value); }
 
 void ParamVisitor::param(std::string_view key, std::vector<std::string>& value, std::string_view unit,
                          std::string_view doc) {

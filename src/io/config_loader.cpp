@@ -40,7 +40,7 @@ class YamlLoadVisitor : public ParamVisitor {
              ParamRange<double> range) override {
     if (!read(key, v, "a number")) return;
     if (!std::isfinite(v)) fail(key, "must be a finite number");
-    if (!range.contains(v)) fail(key, "must be " + in_words(describe(range)) + ", got " + format_number(v));
+    if (!range.contains(v)) fail(key, "must be " + in_words(describe(range)) + ", got " + compact_number(v));
   }
   void param(std::string_view key, std::string& v, std::string_view, std::string_view) override {
     read(key, v, "a string");

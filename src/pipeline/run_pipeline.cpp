@@ -11,6 +11,7 @@
 #include "core/progress.hpp"
 #include "semap/io/dataset.hpp"
 #include "semap/io/frame_source.hpp"
+#include "io/output_folder.hpp"
 #include "pipeline/bounded_queue.hpp"
 #include "pipeline/report.hpp"
 #include "pipeline/simulated_segmenter.hpp"
@@ -83,8 +84,8 @@ std::vector<ReportObject> report_objects(const std::vector<ObjectSummary>& objec
 
 /// The next frame of the source, or nullopt inside for an unreadable one (warned, skipped);
 /// nullopt at the end or when a stop was requested.
-std::optional<LoadedFrame> pull_frame(FrameSource& source, Mapper& mapper, const std::atomic<bool>* stop) {
-  if (stop && stop->load()) return std::nullopt;
+std::optional<LoadedFrame> pull_frame(FrameSource& source, Mapper& mapper, const std::function<bool()>& stop) {
+  if (stop && stop()) return std::nullopt;
   const auto t0 = Clock::now();
   try {
     std::optional<Frame> frame = source.next();
@@ -115,7 +116,7 @@ std::pair<size_t, size_t> feed_frames(Mapper& mapper, FrameSource& source, const
   const size_t total = options.max_frames > 0 && source.size_hint() > 0 ? std::min(options.max_frames, source.size_hint())
                                                                           : std::max(options.max_frames, source.size_hint());
   Prefetcher frames(options.max_frames, static_cast<size_t>(config.pipeline.queue_size), config.pipeline.threads > 1,
-                    [&] { return pull_frame(source, mapper, options.stop); });
+                    [&] { return pull_frame(source, mapper, options.stop_requested); });
   Progress progress("semap run", total);
   size_t fed = 0, skipped = 0, objects = 0;
   while (auto loaded = frames.next()) {
@@ -203,6 +204,8 @@ RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
   const auto wall_start = Clock::now();
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, config.pipeline.threads);
   const auto source = open_frame_source(options.dataset.string(), options.dataset_options);
+  // Opened before mapping: a folder that cannot take outputs fails now, not after the work.
+  OutputFolder out(options.out_dir, {.tool = "run", .publish_last = {"report.html", "report.json"}});
   const DatasetReader* dataset = source->dataset();
   if (dataset && dataset->size() == 0) throw Error(options.dataset, "dataset has no frames");
   const bool poses_given = options.poses == PoseSource::groundtruth;
@@ -224,7 +227,7 @@ RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
   result.mapper = mapper.stats();
   check_run_is_usable(source->name(), result.mapper, outputs, skipped);
 
-  write_map_outputs(mapper, outputs, options.out_dir);
+  write_map_outputs(mapper, outputs, out.staging());
   if (options.evaluate && dataset) result.evaluation = evaluate_run(*dataset, outputs, poses_given);
   result.dataset = source->name();
   result.poses = options.poses;
@@ -239,7 +242,9 @@ RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
   result.wall_s = seconds_since(wall_start);
   result.fps_end_to_end = static_cast<double>(fed + skipped) / std::max(result.wall_s, 1e-9);
   result.peak_rss_mb = static_cast<double>(peak_rss_bytes()) / (1024.0 * 1024.0);
-  write_run_report(options.out_dir, result, outputs);
+  result.stopped_early = options.stop_requested && options.stop_requested();
+  write_run_report(out.staging(), result, outputs);
+  out.publish();
   return result;
 }
 
@@ -273,6 +278,7 @@ nlohmann::json to_json(const RunResult& r) {
       {"threads", r.threads},
   };
   if (!m.map_refresh_note.empty()) report["summary"]["map_refresh_note"] = m.map_refresh_note;
+  if (r.stopped_early) report["summary"]["stopped_early"] = true;
   report["objects_per_class"] = r.objects_per_class;
   report["evaluation"] = to_json(r.evaluation);
   report["timings"] = timings_json(r.timings);

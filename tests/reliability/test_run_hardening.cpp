@@ -1,9 +1,8 @@
-// Issue 22 cases of `semap run` that need the run's own wiring (the lead's part of the issue):
+// Issue 22 cases of `semap run` through its own wiring:
 // its output folder through io/output_folder.hpp (staging + publish, stale objects/<id>.ply
 // removed, Ctrl-C publishes nothing), `--max-frames -1`, `--voxel nan`, config magnitudes with
 // lower bounds that bound memory, and runs where every frame is skipped or every segmentation
-// fails. They are DISABLED_ until that wiring lands: enable each one with it
-// (`--gtest_also_run_disabled_tests` runs them now).
+// fails.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -43,7 +42,7 @@ class RunHardening : public test::CliSuite {
 
 // ------------------------------------------------------------ Data loss and writes where they must not go
 
-TEST_F(RunHardening, DISABLED_ASecondRunFailingMidwayLeavesTheFirstRunExactlyAsItWas) {
+TEST_F(RunHardening, ASecondRunFailingMidwayLeavesTheFirstRunExactlyAsItWas) {
   const fs::path out = path("twice_out");
   ASSERT_EQ(run_semap(run_args(clean(), out)).exit_code, 0);
   const auto before = snapshot(out);
@@ -55,7 +54,7 @@ TEST_F(RunHardening, DISABLED_ASecondRunFailingMidwayLeavesTheFirstRunExactlyAsI
   EXPECT_EQ(changes(before, snapshot(out)), "");
 }
 
-TEST_F(RunHardening, DISABLED_ASuccessfulSecondRunRemovesTheStaleFilesOfTheFirst) {
+TEST_F(RunHardening, ASuccessfulSecondRunRemovesTheStaleFilesOfTheFirst) {
   const fs::path out = path("stale_out");
   ASSERT_EQ(run_semap(run_args(clean(), out)).exit_code, 0);
   const auto r = run_semap(run_args(clean(), out, {"--max-frames", "2"}));
@@ -72,7 +71,7 @@ TEST_F(RunHardening, DISABLED_ASuccessfulSecondRunRemovesTheStaleFilesOfTheFirst
   EXPECT_EQ(std::set<std::string>(manifest.begin(), manifest.end()), visible(out));
 }
 
-TEST_F(RunHardening, DISABLED_CtrlCLeavesNothingThatLooksComplete) {
+TEST_F(RunHardening, CtrlCLeavesNothingThatLooksComplete) {
   // A longer sequence; a full run takes T seconds. SIGINT at T/2 and as soon as the first
   // output file appears: each run either finishes (exit 0, complete outputs) or publishes
   // nothing (exit 130, the folder exactly as before: no map.semap.tmp, no new trajectory beside
@@ -121,7 +120,7 @@ TEST_F(RunHardening, DISABLED_CtrlCLeavesNothingThatLooksComplete) {
   EXPECT_GT(interrupted, 0u);
 }
 
-TEST_F(RunHardening, DISABLED_APlantedObjectsSymlinkIsRefusedNotWrittenThrough) {
+TEST_F(RunHardening, APlantedObjectsSymlinkIsRefusedNotWrittenThrough) {
   const fs::path out = path("planted_objects"), outside = path("objects_outside");
   fs::create_directories(out);
   fs::create_directories(outside);
@@ -133,7 +132,7 @@ TEST_F(RunHardening, DISABLED_APlantedObjectsSymlinkIsRefusedNotWrittenThrough) 
 
 // ------------------------------------------------------------ Crashes, hangs, memory
 
-TEST_F(RunHardening, DISABLED_ConfigMagnitudesThatExplodeMemoryOrCrashPclAreErrors) {
+TEST_F(RunHardening, ConfigMagnitudesThatExplodeMemoryOrCrashPclAreErrors) {
   const fs::path cfg = path("cfg");
   fs::create_directories(cfg);
   const std::vector<std::pair<std::string, std::string>> cases = {
@@ -155,7 +154,7 @@ TEST_F(RunHardening, DISABLED_ConfigMagnitudesThatExplodeMemoryOrCrashPclAreErro
 
 // ------------------------------------------------------------ Silent wrong results and unclear errors
 
-TEST_F(RunHardening, DISABLED_MaxFramesMinusOneAndVoxelNanAreErrors) {
+TEST_F(RunHardening, MaxFramesMinusOneAndVoxelNanAreErrors) {
   expect_one_line_error(run_semap(run_args(clean(), path("flags_out"), {"--max-frames", "-1"})), {"--max-frames"});
   auto args = run_args(clean(), path("flags_out"));
   *(std::find(args.begin(), args.end(), "--voxel") + 1) = "nan";
@@ -163,7 +162,7 @@ TEST_F(RunHardening, DISABLED_MaxFramesMinusOneAndVoxelNanAreErrors) {
   EXPECT_TRUE(tree(path("flags_out")).empty());
 }
 
-TEST_F(RunHardening, DISABLED_ARunWhereEveryFrameIsSkippedOrEverySegmentationFailsFails) {
+TEST_F(RunHardening, ARunWhereEveryFrameIsSkippedOrEverySegmentationFailsFails) {
   // dataset.yaml says 320x240 for 160x120 images: every frame is skipped.
   const fs::path d = path("wrong_size");
   fs::copy(clean(), d, fs::copy_options::recursive);

@@ -131,7 +131,4 @@ void check_param_ranges(const Config& config, std::string_view section) {
 /// rules between parameters (single-parameter ranges belong in visit()).
 void require_param(bool ok, std::string_view key, std::string_view reason);
 
-/// A number as a person writes it: 0.02, 1e-06, 5000 (never 309 digits).
-std::string format_number(double value);
-
 }  // namespace semap

@@ -65,7 +65,7 @@ struct ObjectsConfig {
     v.param("point_stride", point_stride, "px", "every N-th pixel gives object points; finer than pixel_stride joins its cell's segment");
     v.param("dense_depth_tolerance", dense_depth_tolerance, "m/m", "max depth gap (per m of depth) of a dense point to its cell's sample");
     v.param("max_depth", max_depth, "m", "ignore depth beyond this");
-    v.param("voxel_resolution", voxel_resolution, "m", "VCCS voxel size (C2.1)");
+    v.param("voxel_resolution", voxel_resolution, "m", "VCCS voxel size (C2.1)", {0.001, 0.5});
     v.param("seed_resolution", seed_resolution, "m", "VCCS seed spacing (C2.1)");
     v.param("colour_importance", colour_importance, "", "VCCS colour weight");
     v.param("spatial_importance", spatial_importance, "", "VCCS spatial weight");
@@ -116,7 +116,7 @@ struct ObjectsConfig {
     require_param(point_stride >= 1, "objects.point_stride", "must be >= 1");
     require_param(dense_depth_tolerance > 0, "objects.dense_depth_tolerance", "must be > 0");
     require_param(max_depth > 0, "objects.max_depth", "must be > 0");
-    require_param(voxel_resolution > 0, "objects.voxel_resolution", "must be > 0");
+    check_param_ranges(*this, "objects");
     require_param(seed_resolution > voxel_resolution, "objects.seed_resolution", "must exceed voxel_resolution");
     require_param(supervoxel_adopt_radius >= 0, "objects.supervoxel_adopt_radius", "must be >= 0");
     require_param(weight_background > 0, "objects.weight_background", "must be > 0");

@@ -2,7 +2,7 @@
 // `semap run` as a library call: the dataset loop around a semap::Mapper. It reads the
 // dataset on its own thread, feeds the Mapper, shows progress, writes the outputs, evaluates
 // against ground truth when there is some, and writes the report.
-#include <atomic>
+#include <functional>
 #include <filesystem>
 #include <map>
 #include <string>
@@ -36,9 +36,9 @@ struct RunOptions {
   size_t max_frames = 0;   ///< 0 = all
   bool evaluate = true;    ///< evaluation figures when ground truth exists
   bool show_progress = true;
-  /// When set and it becomes true (e.g. on SIGINT), reading stops; the frames so far are
-  /// mapped to the end (pose graph, refresh) and every output is written.
-  const std::atomic<bool>* stop = nullptr;
+  /// Polled between frames: when it returns true (e.g. after SIGINT), reading stops; the frames
+  /// so far are mapped to the end (pose graph, refresh) and every output is written.
+  std::function<bool()> stop_requested;
 };
 
 /// What a run produced: the report.json document, typed.
@@ -55,12 +55,15 @@ struct RunResult {
   double wall_s = 0.0;
   double peak_rss_mb = 0.0;
   int threads = 1;
+  bool stopped_early = false;  ///< stop_requested() ended the input before its end
   Evaluation evaluation;
   std::map<std::string, TimingSummary> timings;
 };
 nlohmann::json to_json(const RunResult& result);
 
-/// Runs the whole pipeline and writes every output into options.out_dir. Returns the result
+/// Runs the whole pipeline and writes every output into options.out_dir, which is consistent as
+/// a whole (io/output_folder: written into a staging folder, published at the end; stale files
+/// of an earlier run removed; a failed run leaves the folder as it was). Returns the result
 /// (also written as report.json). Throws semap::Error on bad input.
 RunResult run_pipeline(const RunOptions& options, const SemapConfig& config);
 

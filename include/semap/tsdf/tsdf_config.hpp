@@ -54,7 +54,7 @@ struct TsdfConfig {
   double epsilon() const { return epsilon_voxels * voxel_size; }
 
   void visit(ParamVisitor& v) {
-    v.param("voxel_size", voxel_size, "m", "voxel edge length s");
+    v.param("voxel_size", voxel_size, "m", "voxel edge length s (from 1 mm: memory grows as 1/s^2 per frame)", {0.001, 1.0});
     v.param("truncation_voxels", truncation_voxels, "voxels", "truncation delta = this * s (METHODS B6: 4)");
     v.param("epsilon_voxels", epsilon_voxels, "voxels", "behind-surface weight drop-off starts at -this * s (B6: 1)");
     v.param("min_range", min_range, "m", "depth below this is not integrated");
@@ -87,7 +87,7 @@ struct TsdfConfig {
     v.param("drop_distance", drop_distance, "m", "free blocks farther than this from the camera (0 = never)");
   }
   void validate() const {
-    require_param(voxel_size > 0 && voxel_size < 1, "tsdf.voxel_size", "must be in (0, 1) m");
+    check_param_ranges(*this, "tsdf");
     require_param(truncation_voxels >= 1 && truncation_voxels <= 16, "tsdf.truncation_voxels", "must be in [1, 16]");
     require_param(epsilon_voxels >= 0 && epsilon_voxels < truncation_voxels, "tsdf.epsilon_voxels",
                   "must be in [0, truncation_voxels)");
