@@ -1,9 +1,13 @@
 #!/usr/bin/env bash
-# Issue 8: the fast test suite (ctest -LE heavy) built and run under AddressSanitizer +
-# UndefinedBehaviorSanitizer in build-asan/ (-O1, line tables), and the pipeline threading tests
-# under ThreadSanitizer in build-tsan/ (SEMAP_ASAN=0 / SEMAP_TSAN=0 skip a part). Any sanitizer
-# report fails: reports abort the process (halt_on_error), and the ctest log is searched as
-# well, since tests that run the semap CLI only see its exit code.
+# Issue 8 / 21: the tests that exercise parsing, memory and threads (folders core, io,
+# segmentation, pipeline, reliability; not heavy) built and run under AddressSanitizer +
+# UndefinedBehaviorSanitizer in build-asan/ (-O1, line tables), and the threading tests under
+# ThreadSanitizer in build-tsan/: the segmentation hand-off (both busy policies), a threaded
+# pipeline run, a threaded run with real tracking (its loop-closure worker) and YOLO, and the
+# tracker's own threading tests. One build tree per sanitizer; each builds only what it runs.
+# SEMAP_ASAN=0 / SEMAP_TSAN=0 skip a part. Any sanitizer report fails: reports abort the
+# process (halt_on_error), and the ctest log is searched as well, since tests that run the
+# semap CLI only see its exit code.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 JOBS=${SEMAP_JOBS:-$(nproc)}
@@ -20,7 +24,8 @@ fail_on_reports() {  # $1: a log file
 start=$SECONDS
 if [ "${SEMAP_ASAN:-1}" = 1 ]; then
   cmake -S . -B build-asan "${COMMON[@]}" -DSEMAP_SANITIZE=address,undefined >/dev/null
-  cmake --build build-asan -j "$JOBS"
+  ASAN_FOLDERS=(core io segmentation pipeline reliability)
+  cmake --build build-asan -j "$JOBS" --target semap "${ASAN_FOLDERS[@]/#/tests_}"
   echo "semap sanitize: ASan+UBSan build in $((SECONDS - start)) s"
   # alloc_dealloc_mismatch=0: PCL 1.13 (built as C++14) gives its point clouds a class-specific
   # aligned operator new that a C++17/20 client does not see, so the shared_ptr deleter instantiated
@@ -30,20 +35,24 @@ if [ "${SEMAP_ASAN:-1}" = 1 ]; then
   export LSAN_OPTIONS=suppressions=$SUPP/lsan.supp:print_suppressions=0
   export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
   t0=$SECONDS
-  (cd build-asan && ctest -LE heavy --output-on-failure -j "$JOBS" --timeout 1800)
+  labels=$(IFS='|'; echo "^(${ASAN_FOLDERS[*]})$")
+  (cd build-asan && ctest -L "$labels" -LE heavy --output-on-failure -j "$JOBS" --timeout 1200)
   fail_on_reports build-asan/Testing/Temporary/LastTest.log
-  echo "semap sanitize: ASan+UBSan fast suite passed with no report ($((SECONDS - t0)) s)"
+  echo "semap sanitize: ASan+UBSan on ${ASAN_FOLDERS[*]} passed with no report ($((SECONDS - t0)) s)"
 fi
 
 if [ "${SEMAP_TSAN:-1}" = 1 ]; then
   t0=$SECONDS
   cmake -S . -B build-tsan "${COMMON[@]}" -DSEMAP_SANITIZE=thread >/dev/null
-  cmake --build build-tsan -j "$JOBS" --target test_pipeline test_segmentation
+  cmake --build build-tsan -j "$JOBS" --target test_pipeline test_pipeline_models test_segmentation_schedule \
+    test_tracking_threads
   export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$SUPP/tsan.supp"
   log=build-tsan/tsan.log
   {
-    build-tsan/tests/segmentation/test_segmentation --gtest_filter='AsyncSegmenter.*'
+    build-tsan/tests/pipeline/test_segmentation_schedule
     build-tsan/tests/pipeline/test_pipeline --gtest_filter='PipelineTest.*:-PipelineTest.CliRunAndConfigErrors'
+    build-tsan/tests/pipeline/test_pipeline_models --gtest_filter='PipelineModels.ThreadedTrackedRunWithYolo'
+    build-tsan/tests/tracking/test_tracking_threads
   } >"$log" 2>&1 || { tail -n 80 "$log"; echo "semap sanitize: TSan tests failed"; exit 1; }
   fail_on_reports "$log"
   echo "semap sanitize: TSan pipeline threading tests passed with no report ($((SECONDS - t0)) s)"

@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# Installs what is missing, builds, and runs the fast test suite (heavy tests: ctest -L heavy),
-# then the reliability steps of issue 8: every libFuzzer target for a bounded time
-# (scripts/ci-fuzz.sh, clang) and the fast suite under ASan+UBSan plus the pipeline threading
-# tests under TSan (scripts/ci-sanitize.sh). SEMAP_QUICK=1 runs the fast suite only.
+# Installs what is missing, builds, and runs: the fast test suite; the heavy subset CI runs
+# (ctest -L ci_heavy; every heavy test: ctest -L heavy); every libFuzzer target for a bounded
+# time (scripts/ci-fuzz.sh, clang); the parsing/memory/thread tests under ASan+UBSan and the
+# threading tests under TSan (scripts/ci-sanitize.sh). SEMAP_QUICK=1 runs the fast suite only.
+# Under CI=true (set by .ci/run) a test whose shared data or model is missing fails instead of
+# skipping. Each step prints its time.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh clang libclang-rt-14-dev
@@ -13,6 +15,11 @@ t0=$SECONDS
 (cd build && ctest -LE heavy --output-on-failure -j "${SEMAP_JOBS:-$(nproc)}" --timeout 900)
 echo "semap test: fast suite in $((SECONDS - t0)) s"
 if [ "${SEMAP_QUICK:-0}" != 1 ]; then
+  # The heavy tests that carry the product's claims and fit the CI budget (label ci_heavy:
+  # demo figures, tracking against Open3D and on redkitchen, loop closure, object maps).
+  t0=$SECONDS
+  (cd build && ctest -L ci_heavy --output-on-failure -j "${SEMAP_JOBS:-$(nproc)}" --timeout 900)
+  echo "semap test: heavy subset in $((SECONDS - t0)) s"
   t0=$SECONDS
   bash scripts/ci-fuzz.sh
   echo "semap test: fuzzing in $((SECONDS - t0)) s"

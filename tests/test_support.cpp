@@ -1,6 +1,8 @@
 #include "test_support.hpp"
 
 #include <array>
+#include <cstdlib>
+#include <string_view>
 #include <cstdio>
 #include <fstream>
 #include <random>
@@ -21,6 +23,11 @@ const tbb::global_control tsan_serial_tbb(tbb::global_control::max_allowed_paral
 
 namespace semap::test {
 
+bool in_ci() {
+  const char* ci = std::getenv("CI");
+  return ci && std::string_view(ci) == "true";
+}
+
 std::filesystem::path data_dir() { return semap::data_dir(std::filesystem::path(SEMAP_SHARED_DIR) / "data"); }
 std::filesystem::path models_dir() {
   return semap::models_dir(std::filesystem::path(SEMAP_SHARED_DIR) / "models");
@@ -38,6 +45,12 @@ TempDir::~TempDir() {
 }
 
 std::filesystem::path semap_executable() { return std::filesystem::path(SEMAP_BINARY_DIR) / "semap"; }
+
+std::string shell_quote(const std::string& text) {
+  std::string quoted = "'";
+  for (char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return quoted + "'";
+}
 
 CommandResult run_command(const std::string& command) {
   CommandResult result;

@@ -1,6 +1,7 @@
 #include <cstdio>
 
 #include "apps/semap/commands.hpp"
+#include "apps/semap/live_view.hpp"
 #include "io/output_folder.hpp"
 #include "pipeline/report.hpp"
 #include "semap/pipeline/run_pipeline.hpp"
@@ -15,6 +16,9 @@ void add_run_command(CLI::App& app, CommandRunner& run) {
     double voxel = 0;
     int threads = 0;
     int64_t max_frames = 0;
+    bool view = false;
+    int view_port = 8765;
+    int view_refresh_ms = 1500;
   };
   auto args = std::make_shared<Args>();
   cmd->add_option("dataset", args->options.dataset,
@@ -35,6 +39,10 @@ void add_run_command(CLI::App& app, CommandRunner& run) {
   cmd->add_option("--max-frames", args->max_frames, "stop after N frames (0 = all)")->check(CLI::Range(int64_t{0}, int64_t{1} << 40));
   cmd->add_option("--threads", args->threads, "worker threads (overrides the config; 1 = deterministic)")->check(CLI::Range(1, 256));
   cmd->add_flag("--no-eval", [args](int64_t) { args->options.evaluate = false; }, "skip evaluation against ground truth");
+  cmd->add_flag("--view", args->view, "serve the growing map to the browser viewer on 127.0.0.1 while mapping");
+  cmd->add_option("--port", args->view_port, "--view: TCP port (0: any free port)")->check(CLI::Range(0, 65535))->capture_default_str();
+  cmd->add_option("--view-refresh-ms", args->view_refresh_ms, "--view: how often the map is refreshed")
+      ->check(CLI::Range(200, 60000))->capture_default_str();
   cmd->callback([&run, args] {
     run = [args]() -> int {
       SemapConfig config = load_semap_config(args->config_path);
@@ -46,7 +54,16 @@ void add_run_command(CLI::App& app, CommandRunner& run) {
       // publishes nothing (io/output_folder.hpp).
       const InterruptGuard interrupts;
       args->options.stop_requested = [] { return interrupt_signal() != 0; };
+      std::unique_ptr<LiveView> live;
+      if (args->view) {
+        live = std::make_unique<LiveView>("127.0.0.1", args->view_port, std::chrono::milliseconds(args->view_refresh_ms),
+                                          "live: " + args->options.dataset.filename().string());
+        args->options.observe_mapper = [&live](const Mapper* mapper) { live->observe(mapper); };
+      }
       const RunResult result = run_pipeline(args->options, config);
+      if (live)
+        std::printf("semap run: live view closed after %zu refreshes (`semap view %s` shows the final map)\n",
+                    live->snapshots(), args->options.out_dir.string().c_str());
       if (result.stopped_early)
         std::fprintf(stderr, "semap run: interrupted: mapped the %zu frames read so far\n", result.frames_read);
       std::fputs(summary_table(to_json(result)).c_str(), stdout);

@@ -441,6 +441,10 @@ std::vector<std::string> OutputFolder::publish() {
   std::vector<std::string> files, dirs;
   walk_staging(staging_fd.fd, "", files, dirs, 0);
   order_for_publish(files, options_.publish_last);
+  // Every folder of the run first, empty ones too (objects/ of a map without objects): a
+  // symlink planted in its place is refused before anything of the old run is touched.
+  std::vector<std::string> created_dirs;
+  for (const auto& d : dirs) open_chain(dir_fd_, d, dir_, &created_dirs);
 
   // Journal first: everything semap may own in DIR after this point, should we be cut short.
   const std::string manifest = manifest_name(options_.tool), journal = journal_name(options_.tool);
@@ -457,7 +461,6 @@ std::vector<std::string> OutputFolder::publish() {
   for (const auto& last : options_.publish_last)
     if (old.files.count(last)) remove_listed_file(dir_fd_, last);
 
-  std::vector<std::string> created_dirs;
   move_into_place(dir_fd_, staging_fd.fd, files, dir_, staging_, created_dirs);
 
   // Folders listed: the ones this publish created and the earlier ones still in use.

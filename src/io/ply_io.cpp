@@ -29,46 +29,6 @@ void append_le(std::string& out, T value) {
   out.append(bytes, sizeof(T));
 }
 
-std::string encode_ply(const std::filesystem::path& path, const TriangleMesh& mesh) {
-  const PointCloud& c = mesh.vertices;
-  if (!c.consistent()) throw Error(path, "point cloud attributes differ in size from the points");
-  const size_t n = c.size();
-  for (const auto& t : mesh.triangles)
-    for (uint32_t index : t)
-      if (index >= n) throw Error(path, "triangle index " + std::to_string(index) + " out of range");
-
-  std::string out = "ply\nformat binary_little_endian 1.0\ncomment written by semap\n";
-  out += "element vertex " + std::to_string(n) + "\n";
-  out += "property float x\nproperty float y\nproperty float z\n";
-  if (c.has_normals()) out += "property float nx\nproperty float ny\nproperty float nz\n";
-  if (c.has_colours()) out += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
-  if (c.has_labels()) out += "property uchar label\n";
-  if (c.has_instances()) out += "property uint instance\n";
-  if (!mesh.triangles.empty())
-    out += "element face " + std::to_string(mesh.triangles.size()) + "\nproperty list uchar int vertex_indices\n";
-  out += "end_header\n";
-
-  const size_t record = 12 + (c.has_normals() ? 12 : 0) + (c.has_colours() ? 3 : 0) + (c.has_labels() ? 1 : 0) +
-                        (c.has_instances() ? 4 : 0);
-  out.reserve(out.size() + n * record + mesh.triangles.size() * 13);
-  for (size_t i = 0; i < n; ++i) {
-    for (int k = 0; k < 3; ++k) append_le<float>(out, c.points[i][k]);
-    if (c.has_normals())
-      for (int k = 0; k < 3; ++k) append_le<float>(out, c.normals[i][k]);
-    if (c.has_colours()) {
-      append_le<uint8_t>(out, c.colours[i].r);
-      append_le<uint8_t>(out, c.colours[i].g);
-      append_le<uint8_t>(out, c.colours[i].b);
-    }
-    if (c.has_labels()) append_le<uint8_t>(out, c.labels[i]);
-    if (c.has_instances()) append_le<uint32_t>(out, c.instances[i]);
-  }
-  for (const auto& t : mesh.triangles) {
-    append_le<uint8_t>(out, 3);
-    for (uint32_t index : t) append_le<int32_t>(out, static_cast<int32_t>(index));
-  }
-  return out;
-}
 
 // ---------------------------------------------------------------- reading
 
@@ -256,6 +216,47 @@ Header parse_header(const std::string& path, const std::string& bytes) {
 
 }  // namespace
 
+std::string encode_ply(const TriangleMesh& mesh, const std::filesystem::path& path) {
+  const PointCloud& c = mesh.vertices;
+  if (!c.consistent()) throw Error(path, "point cloud attributes differ in size from the points");
+  const size_t n = c.size();
+  for (const auto& t : mesh.triangles)
+    for (uint32_t index : t)
+      if (index >= n) throw Error(path, "triangle index " + std::to_string(index) + " out of range");
+
+  std::string out = "ply\nformat binary_little_endian 1.0\ncomment written by semap\n";
+  out += "element vertex " + std::to_string(n) + "\n";
+  out += "property float x\nproperty float y\nproperty float z\n";
+  if (c.has_normals()) out += "property float nx\nproperty float ny\nproperty float nz\n";
+  if (c.has_colours()) out += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+  if (c.has_labels()) out += "property uchar label\n";
+  if (c.has_instances()) out += "property uint instance\n";
+  if (!mesh.triangles.empty())
+    out += "element face " + std::to_string(mesh.triangles.size()) + "\nproperty list uchar int vertex_indices\n";
+  out += "end_header\n";
+
+  const size_t record = 12 + (c.has_normals() ? 12 : 0) + (c.has_colours() ? 3 : 0) + (c.has_labels() ? 1 : 0) +
+                        (c.has_instances() ? 4 : 0);
+  out.reserve(out.size() + n * record + mesh.triangles.size() * 13);
+  for (size_t i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) append_le<float>(out, c.points[i][k]);
+    if (c.has_normals())
+      for (int k = 0; k < 3; ++k) append_le<float>(out, c.normals[i][k]);
+    if (c.has_colours()) {
+      append_le<uint8_t>(out, c.colours[i].r);
+      append_le<uint8_t>(out, c.colours[i].g);
+      append_le<uint8_t>(out, c.colours[i].b);
+    }
+    if (c.has_labels()) append_le<uint8_t>(out, c.labels[i]);
+    if (c.has_instances()) append_le<uint32_t>(out, c.instances[i]);
+  }
+  for (const auto& t : mesh.triangles) {
+    append_le<uint8_t>(out, 3);
+    for (uint32_t index : t) append_le<int32_t>(out, static_cast<int32_t>(index));
+  }
+  return out;
+}
+
 void write_ply(const std::filesystem::path& path, const PointCloud& cloud) {
   TriangleMesh mesh;
   mesh.vertices = cloud;
@@ -263,7 +264,7 @@ void write_ply(const std::filesystem::path& path, const PointCloud& cloud) {
 }
 
 void write_ply(const std::filesystem::path& path, const TriangleMesh& mesh) {
-  write_file_atomic(path, encode_ply(path, mesh));
+  write_file_atomic(path, encode_ply(mesh, path));
 }
 
 TriangleMesh read_ply(const std::filesystem::path& file) {

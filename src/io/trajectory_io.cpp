@@ -46,7 +46,7 @@ Trajectory read_tum_trajectory(const std::filesystem::path& path) {
   return parse_tum_trajectory(io_detail::read_file_bytes(path, kMaxTextFileBytes, "trajectory file"), path.string());
 }
 
-void write_tum_trajectory(const std::filesystem::path& path, const Trajectory& trajectory) {
+std::string format_tum_trajectory(const Trajectory& trajectory, const std::filesystem::path& path) {
   std::string text = "# timestamp tx ty tz qx qy qz qw\n";
   char line[512];
   for (const auto& sp : trajectory) {
@@ -60,7 +60,11 @@ void write_tum_trajectory(const std::filesystem::path& path, const Trajectory& t
                   t.y(), t.z(), q.x(), q.y(), q.z(), q.w());
     text += line;
   }
-  write_file_atomic(path, text);
+  return text;
+}
+
+void write_tum_trajectory(const std::filesystem::path& path, const Trajectory& trajectory) {
+  write_file_atomic(path, format_tum_trajectory(trajectory, path));
 }
 
 }  // namespace semap

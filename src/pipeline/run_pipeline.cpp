@@ -197,6 +197,22 @@ void set_reloader(Mapper& mapper, const DatasetReader* dataset) {
   });
 }
 
+/// Shows the Mapper to RunOptions::observe_mapper for the scope's lifetime.
+class ObserverScope {
+ public:
+  ObserverScope(const std::function<void(const Mapper*)>& observe, const Mapper& mapper) : observe_(observe) {
+    if (observe_) observe_(&mapper);
+  }
+  ~ObserverScope() {
+    if (observe_) observe_(nullptr);
+  }
+  ObserverScope(const ObserverScope&) = delete;
+  ObserverScope& operator=(const ObserverScope&) = delete;
+
+ private:
+  const std::function<void(const Mapper*)>& observe_;
+};
+
 }  // namespace
 
 RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
@@ -218,6 +234,7 @@ RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
                          "yolo:MODEL.onnx for classes and objects)\n");
   Mapper mapper(mapper_config_for(config, *source), source->camera(), std::move(segmenter));
   set_reloader(mapper, dataset);
+  const ObserverScope observed(options.observe_mapper, mapper);
 
   const auto [fed, skipped] = feed_frames(mapper, *source, options);
   const double online_s = seconds_since(wall_start);

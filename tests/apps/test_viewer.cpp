@@ -124,12 +124,6 @@ void write_small_output(const fs::path& dir) {
   write_text(dir / "trajectory.txt", trajectory.str());
 }
 
-std::string shell_quote(const std::string& text) {
-  std::string quoted = "'";
-  for (char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return quoted + "'";
-}
-
 std::string read_file(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
   return std::string(std::istreambuf_iterator<char>(in), {});
@@ -176,28 +170,43 @@ class BackgroundServer {
   bool started() const { return pid_ > 0; }
   /// Sends SIGINT and waits up to `timeout`; the exit code, or -1 when it did not stop.
   int interrupt_and_wait(std::chrono::seconds timeout) {
-    kill(pid_, SIGINT);
+    if (running()) kill(pid_, SIGINT);
+    return wait(timeout);
+  }
+  /// Waits up to `timeout` for the process to end; its exit code, or -1.
+  int wait(std::chrono::seconds timeout) {
     const auto deadline = std::chrono::steady_clock::now() + timeout;
-    while (std::chrono::steady_clock::now() < deadline) {
-      int status = 0;
-      if (waitpid(pid_, &status, WNOHANG) == pid_) {
-        exited_ = true;
-        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-      }
+    while (running() && std::chrono::steady_clock::now() < deadline)
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    }
-    return -1;
+    return exited_ ? exit_code_ : -1;
   }
   bool running() {
     int status = 0;
-    if (!exited_ && waitpid(pid_, &status, WNOHANG) == pid_) exited_ = true;
+    if (!exited_ && waitpid(pid_, &status, WNOHANG) == pid_) {
+      exited_ = true;
+      exit_code_ = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    }
     return !exited_;
   }
 
  private:
   pid_t pid_ = -1;
   bool exited_ = false;
+  int exit_code_ = -1;
 };
+
+/// The viewer URL a background semap prints into `log` ("" when it ends or prints none in 10 s).
+std::string wait_for_url(BackgroundServer& server, const fs::path& log) {
+  const std::regex url_pattern(R"((http://127\.0\.0\.1:\d+/viewer/index\.html))");
+  for (int attempt = 0; attempt < 200; ++attempt) {
+    std::smatch match;
+    const std::string text = read_file(log);
+    if (std::regex_search(text, match, url_pattern)) return match[1];
+    if (!server.running()) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return {};
+}
 
 TEST(Viewer, RejectsMissingFolderAndFolderWithoutMesh) {
   TempDir temp("semap_viewer_bad");
@@ -262,15 +271,7 @@ nlohmann::json check_in_browser(const fs::path& output, const fs::path& shots, c
                           log);
   EXPECT_TRUE(server.started());
 
-  std::string url;
-  const std::regex url_pattern(R"((http://127\.0\.0\.1:\d+/viewer/index\.html))");
-  for (int attempt = 0; attempt < 200 && url.empty(); ++attempt) {
-    std::smatch match;
-    const std::string text = read_file(log);
-    if (std::regex_search(text, match, url_pattern)) url = match[1];
-    else if (!server.running()) break;
-    else std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
+  const std::string url = wait_for_url(server, log);
   if (url.empty()) {
     ADD_FAILURE() << "semap view printed no URL:\n" << read_file(log);
     return nlohmann::json::object();
@@ -304,7 +305,7 @@ nlohmann::json check_in_browser(const fs::path& output, const fs::path& shots, c
 fs::path screenshot_dir(const std::string& name) { return fs::path(SEMAP_BINARY_DIR) / "test_output" / name; }
 
 TEST(Viewer, HeadlessChromiumRendersMeshBoxesAndToggles) {
-  if (const std::string why = browser_missing(SEMAP_VIEWER_SOURCE_DIR, chromium_path()); !why.empty()) GTEST_SKIP() << why;
+  if (const std::string why = browser_missing(SEMAP_VIEWER_SOURCE_DIR, chromium_path()); !why.empty()) SEMAP_SKIP_OR_FAIL(why);
   TempDir temp("semap_viewer_browser");
   fs::path output = temp.path();
   if (const char* given = std::getenv("SEMAP_VIEWER_TEST_DIR")) output = given;
@@ -321,7 +322,7 @@ TEST(Viewer, HeadlessChromiumRendersMeshBoxesAndToggles) {
 // The issue's check: the page loads a real `semap demo` output (a short loop, same pipeline:
 // tracking, noisy segmentation, TSDF, objects) and shows its mesh and object boxes.
 TEST(Viewer, HeadlessChromiumRendersADemoOutput) {
-  if (const std::string why = browser_missing(SEMAP_VIEWER_SOURCE_DIR, chromium_path()); !why.empty()) GTEST_SKIP() << why;
+  if (const std::string why = browser_missing(SEMAP_VIEWER_SOURCE_DIR, chromium_path()); !why.empty()) SEMAP_SKIP_OR_FAIL(why);
   TempDir temp("semap_viewer_demo");
   const fs::path output = temp / "demo";
   const auto demo = run_command(shell_quote(semap_executable().string()) + " demo --frames 40 --out " +
@@ -334,6 +335,37 @@ TEST(Viewer, HeadlessChromiumRendersADemoOutput) {
 
   const auto result = check_in_browser(output, screenshot_dir("viewer_demo"), temp);
   if (!result.empty()) EXPECT_EQ(result["objects"].get<size_t>(), object_count) << "every object gets a box";
+}
+
+// Issue 18: `semap run --view` serves the growing map while it is built. Two screenshots some
+// seconds apart (each after a new snapshot) show a larger mesh; the run still ends normally and
+// publishes its outputs.
+TEST(Viewer, LiveViewShowsTheMapGrowingDuringSemapRun) {
+  SEMAP_REQUIRE_DATA(tum, "tum_fr1_rpy");
+  if (const std::string why = browser_missing(SEMAP_VIEWER_SOURCE_DIR, chromium_path()); !why.empty()) SEMAP_SKIP_OR_FAIL(why);
+  TempDir temp("semap_viewer_live");
+  const fs::path out = temp / "out", log = temp / "run.log", shots = screenshot_dir("viewer_live");
+  fs::remove_all(shots);
+  fs::create_directories(shots);
+  BackgroundServer run(shell_quote(semap_executable().string()) + " run " + shell_quote(tum.string()) + " --out " +
+                           shell_quote(out.string()) + " --view --port 0 --view-refresh-ms 1000 --threads 2 --no-eval",
+                       log);
+  const std::string url = wait_for_url(run, log);
+  ASSERT_FALSE(url.empty()) << "semap run --view printed no URL:\n" << read_file(log);
+  const auto browser = run_command("cd " + shell_quote(std::string(SEMAP_VIEWER_SOURCE_DIR)) +
+                                   " && timeout 180 node test/screenshot.mjs --url " + shell_quote(url) + " --out " +
+                                   shell_quote(shots.string()) + " --chromium " + shell_quote(chromium_path()) +
+                                   " --live-gap-ms 3000");
+  EXPECT_EQ(browser.exit_code, 0) << browser.output;
+  EXPECT_EQ(run.wait(std::chrono::seconds(300)), 0) << read_file(log);
+  EXPECT_TRUE(fs::is_regular_file(out / "mesh.ply")) << "the run publishes its outputs as without --view";
+  const auto result = nlohmann::json::parse(read_file(shots / "result.json"), nullptr, false);
+  ASSERT_TRUE(result.is_object() && result.contains("live_second")) << browser.output;
+  std::printf("[live view] vertices %d -> %d, canvas %.3f -> %.3f\n", result["live_first"]["vertices"].get<int>(),
+              result["live_second"]["vertices"].get<int>(), result["live_first"]["foreground_fraction"].get<double>(),
+              result["live_second"]["foreground_fraction"].get<double>());
+  EXPECT_GT(result["live_second"]["vertices"].get<int>(), result["live_first"]["vertices"].get<int>());
+  EXPECT_GT(foreground_fraction(shots / "live_2.png"), 0.02) << "the second screenshot shows the mesh";
 }
 
 }  // namespace

@@ -21,7 +21,7 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 TEST(OpenNI2, NoDeviceFailsFastNamingTheDevice) {
-  if (!have_openni2_support()) GTEST_SKIP() << "built without OpenNI2";
+  if (!have_openni2_support()) SEMAP_SKIP_OR_FAIL("built without OpenNI2");
   const auto t0 = Clock::now();
   EXPECT_TRUE(throws_naming([] { open_frame_source("openni2:"); }, "openni2: no OpenNI2 camera connected"));
   EXPECT_LT(seconds_since(t0), 5.0);
@@ -69,7 +69,7 @@ int record_dummy(const fs::path& path, std::chrono::milliseconds duration) {
 }
 
 TEST(OpenNI2, RecordingOpensAsAFiniteSource) {
-  if (!have_openni2_support()) GTEST_SKIP() << "built without OpenNI2";
+  if (!have_openni2_support()) SEMAP_SKIP_OR_FAIL("built without OpenNI2");
   test::TempDir dir("semap_openni2");
   const fs::path oni = dir / "dummy.oni";
   const int recorded = record_dummy(oni, std::chrono::milliseconds(700));
@@ -101,7 +101,7 @@ TEST(OpenNI2, RecordingOpensAsAFiniteSource) {
 }
 
 TEST(OpenNI2, UnusableDeviceIsOneLineNamingIt) {
-  if (!have_openni2_support()) GTEST_SKIP() << "built without OpenNI2";
+  if (!have_openni2_support()) SEMAP_SKIP_OR_FAIL("built without OpenNI2");
   // Opened once through OpenNI2, the Dummy device is listed like a plugged-in camera; PCL's
   // grabber cannot set its video mode (the driver has none to set).
   openni::OpenNI::initialize();

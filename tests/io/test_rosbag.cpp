@@ -131,8 +131,8 @@ class TumBag : public ::testing::Test {
     dir_.reset();
   }
   void SetUp() override {
-    if (!have_rosbag_support()) GTEST_SKIP() << "built without ROS bag support";
-    if (!folder_) GTEST_SKIP() << "shared data missing: tum_fr1_rpy";
+    if (!have_rosbag_support()) SEMAP_SKIP_OR_FAIL("built without ROS bag support");
+    if (!folder_) SEMAP_SKIP_OR_FAIL("shared data missing: " << test::data_dir() / "tum_fr1_rpy" << " (set SEMAP_DATA_DIR)");
   }
   static std::unique_ptr<test::TempDir> dir_;
   static std::unique_ptr<DatasetReader> folder_;
@@ -304,8 +304,9 @@ double mean_abs_diff(const cv::Mat& a, const cv::Mat& b) {
 class BagEncodings : public ::testing::Test {
  protected:
   void SetUp() override {
-    if (!have_rosbag_support()) GTEST_SKIP() << "built without ROS bag support";
-    if (!fs::exists(test::data_dir() / "tum_fr1_rpy")) GTEST_SKIP() << "shared data missing: tum_fr1_rpy";
+    if (!have_rosbag_support()) SEMAP_SKIP_OR_FAIL("built without ROS bag support");
+    SEMAP_REQUIRE_DATA(tum, "tum_fr1_rpy");
+    (void)tum;
     small_ = small_frame();
   }
   SmallFrame small_;

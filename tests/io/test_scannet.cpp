@@ -163,8 +163,7 @@ double ms_per_frame(const DatasetReader& reader, size_t frames) {
 class ScanNet : public ::testing::Test {
  protected:
   void SetUp() override {
-    const fs::path root = test::data_dir() / "7scenes_redkitchen";
-    if (!fs::exists(root)) GTEST_SKIP() << "shared data missing: " << root;
+    SEMAP_REQUIRE_DATA(root, "7scenes_redkitchen");
     source_ = load_source(root);
   }
   /// 7-Scenes frame index of ScanNet frame i (the invalid one is skipped).

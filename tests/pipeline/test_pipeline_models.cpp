@@ -39,8 +39,7 @@ RunResult run_with(const std::filesystem::path& dataset, const std::filesystem::
 
 TEST(PipelineModels, YoloSegmenterLabelsTableAndChairsAndMapsThem) {
   SEMAP_REQUIRE_DATA(kitchen, "7scenes_redkitchen");
-  const auto model = test::models_dir() / "yolov8n-seg-320.onnx";
-  if (!std::filesystem::exists(model)) GTEST_SKIP() << "model missing: " << model;
+  SEMAP_REQUIRE_MODEL(model, "yolov8n-seg-320.onnx");
   test::TempDir out("semap_pipeline_yolo");
   const RunResult result = run_with(kitchen, out.path(), "yolo:" + model.string());
   EXPECT_GE(result.mapper.segmented_frames, 8u);
@@ -60,8 +59,7 @@ TEST(PipelineModels, YoloSegmenterLabelsTableAndChairsAndMapsThem) {
 
 TEST(PipelineModels, SemanticSegmenterLabelsTableAndChairs) {
   SEMAP_REQUIRE_DATA(kitchen, "7scenes_redkitchen");
-  const auto model = test::models_dir() / "deeplabv3-mnv2-voc-257.onnx";
-  if (!std::filesystem::exists(model)) GTEST_SKIP() << "model missing: " << model;
+  SEMAP_REQUIRE_MODEL(model, "deeplabv3-mnv2-voc-257.onnx");
   test::TempDir out("semap_pipeline_semantic");
   const RunResult result = run_with(kitchen, out.path(), "semantic:" + model.string());
   EXPECT_GE(result.mapper.segmented_frames, 8u);
@@ -69,6 +67,36 @@ TEST(PipelineModels, SemanticSegmenterLabelsTableAndChairs) {
   std::printf("semantic: %zu table, %zu chair vertices of %zu\n", vertices_labelled(mesh, Label::kTable),
               vertices_labelled(mesh, Label::kChair), mesh.vertices.size());
   EXPECT_GT(vertices_labelled(mesh, Label::kTable) + vertices_labelled(mesh, Label::kChair), 200u);
+}
+
+// The product's default shape on real frames, small enough for ThreadSanitizer
+// (scripts/ci-sanitize.sh): threaded stages, tracking with its loop-closure worker, YOLO on
+// its own thread with the default schedule (every 5th frame and keyframes).
+TEST(PipelineModels, ThreadedTrackedRunWithYolo) {
+  SEMAP_REQUIRE_DATA(kitchen, "7scenes_redkitchen");
+  SEMAP_REQUIRE_MODEL(model, "yolov8n-seg-320.onnx");
+  test::TempDir out("semap_pipeline_threaded_yolo");
+  Progress::set_mode(-1);
+  SemapConfig config;
+  config.tsdf.voxel_size = 0.04;
+  config.pipeline.threads = 2;
+  config.tracking.background_loop_closure = true;
+  RunOptions o;
+  o.dataset = kitchen;
+  o.out_dir = out.path();
+  o.poses = PoseSource::track;
+  o.segmenter = "yolo:" + model.string();
+  o.max_frames = 30;
+  o.show_progress = false;
+  const RunResult result = run_pipeline(o, config);
+  ASSERT_TRUE(result.evaluation.ate);
+  std::printf("threaded yolo: ATE %.2f cm, %zu segmented, %zu dropped, %zu fused, %zu objects\n",
+              result.evaluation.ate->rmse * 100, result.mapper.segmented_frames, result.mapper.segmentations_dropped,
+              result.mapper.frames_fused, result.mapper.objects);
+  EXPECT_LE(result.evaluation.ate->rmse, 0.05);
+  EXPECT_GE(result.mapper.segmented_frames, 4u);
+  EXPECT_EQ(result.mapper.frames_fused + result.mapper.lost_frames, 30u);
+  EXPECT_GE(result.mapper.objects, 1u);
 }
 
 }  // namespace

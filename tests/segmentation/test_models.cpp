@@ -18,9 +18,7 @@ namespace {
 
 std::filesystem::path model(const std::string& name) { return test::models_dir() / name; }
 
-#define REQUIRE_MODEL(var, name)                      \
-  const std::filesystem::path var = model(name);      \
-  if (!std::filesystem::exists(var)) GTEST_SKIP() << "model missing: " << var
+#define REQUIRE_MODEL(var, name) SEMAP_REQUIRE_MODEL(var, name)
 
 double mask_iou(const cv::Mat& a, const cv::Mat& b) {
   const int inter = cv::countNonZero(a & b), uni = cv::countNonZero(a | b);

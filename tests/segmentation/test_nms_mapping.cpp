@@ -126,8 +126,7 @@ TEST(ClassMapping, CocoVocAndNames) {
 }
 
 TEST(OnnxModelInfo, ReadsShapes) {
-  const auto yolo = test::models_dir() / "yolov8n-seg-320.onnx";
-  if (!std::filesystem::exists(yolo)) GTEST_SKIP();
+  SEMAP_REQUIRE_MODEL(yolo, "yolov8n-seg-320.onnx");
   const OnnxModelInfo info = read_onnx_model_info(yolo);
   ASSERT_EQ(info.inputs.size(), 1u);
   EXPECT_EQ(info.inputs[0].shape, (std::vector<int64_t>{1, 3, 320, 320}));

@@ -1,7 +1,8 @@
 // semap viewer: labelled mesh with per-class toggles, object boxes with labels (click -> class
 // distribution and point count) and the camera trajectory. Loads its data relative to the page
 // as listed by viewer.json (written by `semap view`), so optional files that are absent are
-// never fetched (no 404s in the console).
+// never fetched (no 404s in the console). With a "live" entry (`semap run --view`) it polls the
+// run's live.json and reloads the map whenever a new snapshot is out.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
 import { CSS2DRenderer, CSS2DObject } from 'three/examples/jsm/renderers/CSS2DRenderer.js';
@@ -467,6 +468,85 @@ function fitCamera(box, up) {
 
 // ------------------------------------------------------------------ loading
 
+// Loads the mesh, objects and trajectory listed in `files` into the (empty) scene groups.
+// `quiet`: no status lines (live refreshes). Returns the bounds of what was loaded and the poses.
+async function loadMap(files, quiet = false) {
+  const say = quiet ? () => {} : showMessage;
+  const bounds = new THREE.Box3();
+  if (files.mesh) {
+    try {
+      const ply = parsePly(await fetchChecked(files.mesh, 'binary'));
+      if (ply.vertexCount > 0) {
+        const counts = buildMesh(ply);
+        buildClassToggles(counts);
+        updateVisibleClasses();
+        // A map without any labels (segmenter "none") reads better in its fused colours.
+        if (state.rgbAttribute && [...counts.keys()].every((cls) => cls === 0)) {
+          document.getElementById('colour-mode').value = 'rgb';
+        }
+        setColourMode(document.getElementById('colour-mode').value);
+        bounds.union(state.meshGeometry.boundingBox);
+      }
+      const triangles = ply.indices ? ply.indices.length / 3 : 0;
+      say(`mesh: ${ply.vertexCount.toLocaleString()} vertices, ${triangles.toLocaleString()} triangles`);
+    } catch (error) {
+      showMessage(`mesh.ply could not be shown: ${error.message}`, 'error');
+    }
+  } else {
+    say('No mesh.ply in this folder.', 'warn');
+  }
+
+  if (files.objects) {
+    try {
+      const count = buildObjects(await fetchChecked(files.objects, 'json'));
+      say(`objects: ${count}`);
+    } catch (error) {
+      showMessage(`objects.json could not be shown: ${error.message}`, 'error');
+    }
+  } else {
+    say('No objects.json: no object boxes.', 'warn');
+  }
+
+  let poses = [];
+  if (files.trajectory) {
+    try {
+      const parsed = parseTum(await fetchChecked(files.trajectory, 'text'));
+      poses = parsed.poses;
+      if (poses.length >= 1) buildTrajectory(poses);
+      say(`trajectory: ${poses.length} poses${parsed.bad ? ` (${parsed.bad} bad lines skipped)` : ''}`);
+      if (bounds.isEmpty()) for (const pose of poses) bounds.expandByPoint(pose.p);
+    } catch (error) {
+      showMessage(`trajectory.txt could not be shown: ${error.message}`, 'error');
+    }
+  } else {
+    say('No trajectory.txt: no camera path.', 'warn');
+  }
+  if (bounds.isEmpty()) for (const entry of state.objects) bounds.expandByPoint(entry.centre);
+  return { bounds, poses };
+}
+
+// Empties the scene groups and what refers to them (before a live refresh loads the map again).
+function clearMap() {
+  for (const group of [meshGroup, boxGroup, trajectoryGroup]) {
+    group.traverse((node) => {
+      if (node.geometry) node.geometry.dispose();
+      if (node.material) node.material.dispose();
+      if (node.element && node.element.remove) node.element.remove();  // CSS2D labels
+    });
+    group.clear();
+  }
+  state.meshGeometry = null;
+  state.trianglesByClass = new Map();
+  state.objects = [];
+  state.pickTargets = [];
+  state.trajectoryMarkers = null;
+}
+
+function fitToMap(bounds, floorId, poses) {
+  const box = bounds.isEmpty() ? new THREE.Box3(new THREE.Vector3(-1, -1, -1), new THREE.Vector3(1, 1, 1)) : bounds;
+  fitCamera(box, estimateUp(floorId, poses));
+}
+
 async function main() {
   animate();
   let manifest;
@@ -488,59 +568,51 @@ async function main() {
     showMessage(`Class names unavailable: ${error.message}`, 'warn');
   }
   const floorId = state.classes.findIndex((c) => c && c.name === 'floor');
+  const { bounds, poses } = await loadMap(files, Boolean(manifest.live));
+  fitToMap(bounds, floorId, poses);
+  finish();
+  if (manifest.live) startLive(manifest.live, files, floorId, bounds);
+}
 
-  const bounds = new THREE.Box3();
-  if (files.mesh) {
+// ------------------------------------------------------------------ live mode (`semap run --view`)
+
+// Polls the run's state; when a new snapshot is out, loads the map again. The camera is fitted
+// again only while the map outgrows the view (the user's own view is kept otherwise).
+function startLive(live, files, floorId, fittedBounds) {
+  const line = document.createElement('div');
+  line.className = 'msg';
+  line.id = 'live-status';
+  dom.status.prepend(line);
+  let version = -1;
+  let fitted = fittedBounds.isEmpty() ? null : fittedBounds.clone();
+  let busy = false;
+  const poll = async () => {
+    if (busy) return;
+    busy = true;
     try {
-      const ply = parsePly(await fetchChecked(files.mesh, 'binary'));
-      const counts = buildMesh(ply);
-      buildClassToggles(counts);
-      updateVisibleClasses();
-      // A map without any labels (segmenter "none") reads better in its fused colours.
-      if (state.rgbAttribute && [...counts.keys()].every((cls) => cls === 0)) {
-        document.getElementById('colour-mode').value = 'rgb';
-        setColourMode('rgb');
+      const s = await fetchChecked(live.state, 'json');
+      line.textContent = `live: ${s.frames} frames, ${Number(s.fps).toFixed(1)} fps, ${s.objects} objects` +
+        (s.finished ? ' (finished)' : '');
+      if (s.version !== version) {
+        version = s.version;
+        clearMap();
+        const { bounds, poses } = await loadMap(files, true);
+        const outgrown = fitted === null || !fitted.clone().expandByScalar(0.25 * fitted.getSize(new THREE.Vector3()).length()).containsBox(bounds);
+        if (!bounds.isEmpty() && outgrown) {
+          fitToMap(bounds, floorId, poses);
+          fitted = bounds.clone();
+        }
+        state.liveVersion = version;
+        needsRender = true;
       }
-      bounds.union(state.meshGeometry.boundingBox);
-      const triangles = ply.indices ? ply.indices.length / 3 : 0;
-      showMessage(`mesh: ${ply.vertexCount.toLocaleString()} vertices, ${triangles.toLocaleString()} triangles`);
     } catch (error) {
-      showMessage(`mesh.ply could not be shown: ${error.message}`, 'error');
+      line.textContent = `live: the run is over or unreachable (${error.message})`;
+    } finally {
+      busy = false;
     }
-  } else {
-    showMessage('No mesh.ply in this folder.', 'warn');
-  }
-
-  if (files.objects) {
-    try {
-      const count = buildObjects(await fetchChecked(files.objects, 'json'));
-      showMessage(`objects: ${count}`);
-    } catch (error) {
-      showMessage(`objects.json could not be shown: ${error.message}`, 'error');
-    }
-  } else {
-    showMessage('No objects.json: no object boxes.', 'warn');
-  }
-
-  let poses = [];
-  if (files.trajectory) {
-    try {
-      const parsed = parseTum(await fetchChecked(files.trajectory, 'text'));
-      poses = parsed.poses;
-      if (poses.length >= 1) buildTrajectory(poses);
-      showMessage(`trajectory: ${poses.length} poses${parsed.bad ? ` (${parsed.bad} bad lines skipped)` : ''}`);
-      if (bounds.isEmpty()) for (const pose of poses) bounds.expandByPoint(pose.p);
-    } catch (error) {
-      showMessage(`trajectory.txt could not be shown: ${error.message}`, 'error');
-    }
-  } else {
-    showMessage('No trajectory.txt: no camera path.', 'warn');
-  }
-
-  if (bounds.isEmpty()) for (const entry of state.objects) bounds.expandByPoint(entry.centre);
-  if (bounds.isEmpty()) bounds.set(new THREE.Vector3(-1, -1, -1), new THREE.Vector3(1, 1, 1));
-  fitCamera(bounds, estimateUp(floorId, poses));
-  return finish();
+  };
+  poll();
+  setInterval(poll, Math.max(200, Number(live.interval_ms) || 1500));
 }
 
 function finish() {
@@ -563,6 +635,8 @@ window.semapViewer = {
   get ready() { return state.ready; },
   get messages() { return [...state.messages]; },
   objectCount: () => state.objects.length,
+  vertexCount: () => (state.meshGeometry ? state.meshGeometry.getAttribute('position').count : 0),
+  get liveVersion() { return state.liveVersion ?? null; },
   visibleTriangleCount: () => (state.meshGeometry && state.meshGeometry.index ? state.meshGeometry.index.count / 3 : 0),
   // Page coordinates of an object's box centre (for clicking it in tests).
   objectScreenPosition(index) {

@@ -5,7 +5,10 @@
 //   - the class toggles work: with every class switched off most of those pixels disappear,
 //   - clicking an object box opens its panel (class distribution, point count),
 //   - the console shows no errors and no request fails.
+// With --live-gap-ms G (a `semap run --view` page) it checks the live view instead: two
+// screenshots G ms apart, each after a new snapshot arrived, must show a growing mesh.
 // Usage: node test/screenshot.mjs --url URL --out DIR [--min-fraction 0.05] [--chromium PATH]
+//        [--live-gap-ms G]
 // Exit: 0 pass, 1 an assertion failed, 2 the browser could not be started.
 import { chromium } from 'playwright-core';
 import fs from 'node:fs';
@@ -13,7 +16,7 @@ import os from 'node:os';
 import path from 'node:path';
 
 function parseArgs(argv) {
-  const args = { url: null, out: null, minFraction: 0.05, chromium: '/usr/bin/chromium', timeoutMs: 90000 };
+  const args = { url: null, out: null, minFraction: 0.05, chromium: '/usr/bin/chromium', timeoutMs: 90000, liveGapMs: 0 };
   for (let i = 2; i < argv.length; ++i) {
     const key = argv[i];
     const value = argv[i + 1];
@@ -22,6 +25,7 @@ function parseArgs(argv) {
     else if (key === '--min-fraction') args.minFraction = Number(value);
     else if (key === '--chromium') args.chromium = value;
     else if (key === '--timeout-ms') args.timeoutMs = Number(value);
+    else if (key === '--live-gap-ms') args.liveGapMs = Number(value);
     else { console.log(`unknown argument ${key}`); process.exit(2); }
     ++i;
   }
@@ -53,6 +57,67 @@ async function foregroundFraction(page, png) {
     }
     return differing / (canvas.width * canvas.height);
   }, { b64: png.toString('base64'), clear: CLEAR });
+}
+
+// The live view: a first screenshot once a snapshot with a mesh is shown, a second one `gap`
+// ms later after a newer snapshot; the mesh must have grown between them.
+async function liveCheck(page, args, result, problems) {
+  const shot = async (name, afterVersion) => {
+    await page.waitForFunction((v) => window.semapViewer.liveVersion !== null && window.semapViewer.liveVersion > v &&
+      window.semapViewer.vertexCount() > 0, afterVersion, { timeout: args.timeoutMs });
+    await page.waitForTimeout(300);  // the reload of that snapshot finishes drawing
+    const state = await page.evaluate(() => ({ version: window.semapViewer.liveVersion, vertices: window.semapViewer.vertexCount() }));
+    await page.evaluate(() => window.semapViewer.render());
+    const png = await page.screenshot({ path: path.join(args.out, name) });
+    return { ...state, foreground_fraction: await foregroundFraction(page, png) };
+  };
+  result.live_first = await shot('live_1.png', 0);
+  await page.waitForTimeout(args.liveGapMs);
+  result.live_second = await shot('live_2.png', result.live_first.version);
+  if (!(result.live_second.vertices > result.live_first.vertices)) {
+    problems.push(`the live mesh did not grow: ${result.live_first.vertices} -> ${result.live_second.vertices} vertices`);
+  }
+}
+
+// The checks of a finished output folder (`semap view DIR`).
+async function folderChecks(page, args, result, problems) {
+  // 1. The page as a person sees it.
+  await page.screenshot({ path: path.join(args.out, 'viewer.png') });
+
+  // 2. The canvas alone: the mesh must cover a real share of it.
+  await page.evaluate(() => { document.body.classList.add('hide-ui'); window.semapViewer.render(); });
+  const canvasPng = await page.screenshot({ path: path.join(args.out, 'canvas.png') });
+  result.foreground_fraction = await foregroundFraction(page, canvasPng);
+  if (!(result.foreground_fraction > args.minFraction)) {
+    problems.push(`only ${(100 * result.foreground_fraction).toFixed(2)}% of the canvas differs from the background (need > ${(100 * args.minFraction).toFixed(2)}%)`);
+  }
+
+  // 3. Every class off: the triangles disappear (boxes and trajectory remain, thin lines).
+  await page.evaluate(() => { window.semapViewer.setAllClasses(false); window.semapViewer.render(); });
+  const hiddenPng = await page.screenshot({ path: path.join(args.out, 'classes_off.png') });
+  result.foreground_fraction_classes_off = await foregroundFraction(page, hiddenPng);
+  result.visible_triangles_classes_off = await page.evaluate(() => window.semapViewer.visibleTriangleCount());
+  if (result.visible_triangles_classes_off !== 0) problems.push('triangles remain with every class switched off');
+  if (!(result.foreground_fraction_classes_off < 0.5 * result.foreground_fraction)) {
+    problems.push(`class toggles do not hide the mesh (${result.foreground_fraction_classes_off} vs ${result.foreground_fraction})`);
+  }
+  await page.evaluate(() => { window.semapViewer.setAllClasses(true); document.body.classList.remove('hide-ui'); window.semapViewer.render(); });
+
+  // 4. Click the first object's box: its panel shows the distribution and point count.
+  if (result.objects > 0) {
+    const target = await page.evaluate(() => window.semapViewer.objectScreenPosition(0));
+    await page.mouse.click(target.x, target.y);
+    await page.waitForTimeout(200);
+    const panel = await page.evaluate(() => {
+      const info = document.getElementById('object-info');
+      return { hidden: info.hidden, text: info.innerText };
+    });
+    result.object_panel = panel.text;
+    if (panel.hidden || !/point count/.test(panel.text) || !/class distribution/.test(panel.text)) {
+      problems.push(`clicking object ${target.id} did not open its panel: ${JSON.stringify(panel)}`);
+    }
+    await page.screenshot({ path: path.join(args.out, 'object_panel.png') });
+  }
 }
 
 async function main() {
@@ -98,44 +163,9 @@ async function main() {
     result.messages = await page.evaluate(() => window.semapViewer.messages);
     result.objects = await page.evaluate(() => window.semapViewer.objectCount());
     result.visible_triangles = await page.evaluate(() => window.semapViewer.visibleTriangleCount());
+    if (args.liveGapMs > 0) await liveCheck(page, args, result, problems);
+    else await folderChecks(page, args, result, problems);
 
-    // 1. The page as a person sees it.
-    await page.screenshot({ path: path.join(args.out, 'viewer.png') });
-
-    // 2. The canvas alone: the mesh must cover a real share of it.
-    await page.evaluate(() => { document.body.classList.add('hide-ui'); window.semapViewer.render(); });
-    const canvasPng = await page.screenshot({ path: path.join(args.out, 'canvas.png') });
-    result.foreground_fraction = await foregroundFraction(page, canvasPng);
-    if (!(result.foreground_fraction > args.minFraction)) {
-      problems.push(`only ${(100 * result.foreground_fraction).toFixed(2)}% of the canvas differs from the background (need > ${(100 * args.minFraction).toFixed(2)}%)`);
-    }
-
-    // 3. Every class off: the triangles disappear (boxes and trajectory remain, thin lines).
-    await page.evaluate(() => { window.semapViewer.setAllClasses(false); window.semapViewer.render(); });
-    const hiddenPng = await page.screenshot({ path: path.join(args.out, 'classes_off.png') });
-    result.foreground_fraction_classes_off = await foregroundFraction(page, hiddenPng);
-    result.visible_triangles_classes_off = await page.evaluate(() => window.semapViewer.visibleTriangleCount());
-    if (result.visible_triangles_classes_off !== 0) problems.push('triangles remain with every class switched off');
-    if (!(result.foreground_fraction_classes_off < 0.5 * result.foreground_fraction)) {
-      problems.push(`class toggles do not hide the mesh (${result.foreground_fraction_classes_off} vs ${result.foreground_fraction})`);
-    }
-    await page.evaluate(() => { window.semapViewer.setAllClasses(true); document.body.classList.remove('hide-ui'); window.semapViewer.render(); });
-
-    // 4. Click the first object's box: its panel shows the distribution and point count.
-    if (result.objects > 0) {
-      const target = await page.evaluate(() => window.semapViewer.objectScreenPosition(0));
-      await page.mouse.click(target.x, target.y);
-      await page.waitForTimeout(200);
-      const panel = await page.evaluate(() => {
-        const info = document.getElementById('object-info');
-        return { hidden: info.hidden, text: info.innerText };
-      });
-      result.object_panel = panel.text;
-      if (panel.hidden || !/point count/.test(panel.text) || !/class distribution/.test(panel.text)) {
-        problems.push(`clicking object ${target.id} did not open its panel: ${JSON.stringify(panel)}`);
-      }
-      await page.screenshot({ path: path.join(args.out, 'object_panel.png') });
-    }
   } catch (error) {
     problems.push(`viewer check failed: ${error.message}`);
   } finally {

@@ -11,6 +11,8 @@ namespace semap {
 
 void write_ply(const std::filesystem::path& path, const PointCloud& cloud);
 void write_ply(const std::filesystem::path& path, const TriangleMesh& mesh);
+/// The bytes write_ply writes (`name` only for messages), e.g. to serve a mesh from memory.
+std::string encode_ply(const TriangleMesh& mesh, const std::filesystem::path& name);
 /// Reads vertices (and faces, if any). Throws semap::Error naming the file for malformed
 /// headers, truncated data, unsupported formats.
 TriangleMesh read_ply(const std::filesystem::path& path);

@@ -13,6 +13,8 @@ namespace semap {
 Trajectory read_tum_trajectory(const std::filesystem::path& path);
 /// Parses trajectory text (`source` names it in messages). Same rules as above.
 Trajectory parse_tum_trajectory(const std::string& text, const std::string& source);
+/// The text write_tum_trajectory writes (`name` only for messages: a non-finite pose throws).
+std::string format_tum_trajectory(const Trajectory& trajectory, const std::filesystem::path& name);
 /// Writes atomically, full double precision.
 void write_tum_trajectory(const std::filesystem::path& path, const Trajectory& trajectory);
 

@@ -39,6 +39,9 @@ struct RunOptions {
   /// Polled between frames: when it returns true (e.g. after SIGINT), reading stops; the frames
   /// so far are mapped to the end (pose graph, refresh) and every output is written.
   std::function<bool()> stop_requested;
+  /// Called with the run's Mapper once it exists and with nullptr before it is destroyed (also
+  /// when the run fails): e.g. a live view reading its thread-safe accessors meanwhile.
+  std::function<void(const Mapper*)> observe_mapper;
 };
 
 /// What a run produced: the report.json document, typed.
