@@ -145,7 +145,7 @@ void bind_mapper(py::module_& m) {
            py::arg("labels") = py::none(), py::arg("instances") = py::none(), py::arg("pose") = py::none(),
            py::kw_only(), py::arg("bgr") = false,
            "Tracks (or takes `pose`), segments and fuses one frame. rgb: uint8 (H, W, 3) in RGB order (BGR "
-           "with bgr=True) or None; depth: uint16 raw units or float32 metres (H, W). The arrays are referenced, "
+           "with bgr=True); depth: uint16 raw units or float32 metres (H, W). The arrays are referenced, "
            "not copied: do not write into them afterwards.")
       .def("finish", &PyMapper::finish, "final pose graph, map refresh, final object pass (idempotent)")
       .def("save", &PyMapper::save, py::arg("out_dir"),

@@ -46,15 +46,25 @@ void emit(YAML::Emitter& out, const py::handle& value, const std::string& key) {
   }
 }
 
+/// The CLI's defaults, except that the mesh carries the surfaces' RGB colours (issue 15:
+/// mesh.colors), not the class palette (mesh.labels and semap.class_colors() give that).
+SemapConfig python_defaults() {
+  SemapConfig c;
+  c.tsdf.colour_layer = true;
+  c.tsdf.mesh_colour = "rgb";
+  return c;
+}
+
 }  // namespace
 
 SemapConfig config_from_python(const py::handle& config) {
-  if (config.is_none()) return SemapConfig{};
+  SemapConfig c = python_defaults();
+  const ParamTree tree = [&](ParamVisitor& v) { c.visit(v); };
+  if (config.is_none()) return c;
   if (py::isinstance<py::dict>(config)) {
     YAML::Emitter out;
     emit(out, config, "");
-    SemapConfig c;
-    load_config_string(out.c_str(), kSource, [&](ParamVisitor& v) { c.visit(v); });
+    load_config_string(out.c_str(), kSource, tree);
     c.validate();
     return c;
   }
@@ -62,7 +72,9 @@ SemapConfig config_from_python(const py::handle& config) {
   if (py::isinstance<py::str>(config) || py::hasattr(config, "__fspath__")) {
     const std::string path = fspath(config).cast<std::string>();
     if (path.empty()) throw py::value_error("config: empty path (None gives the defaults)");
-    return load_semap_config(path);
+    load_config_file(path, tree);
+    c.validate();
+    return c;
   }
   bad_argument("config", "None, a dict with the YAML's keys or the path of a YAML file", config);
 }

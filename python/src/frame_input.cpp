@@ -63,8 +63,7 @@ cv::Mat take_depth(const py::handle& object, const CameraModel& camera) {
 /// Colour as H x W x 3 uint8. Shared when the pixels are packed (channel stride +1, or -1: an
 /// RGB view rgb[..., ::-1] of BGR memory, as OpenCV users make), copied otherwise.
 cv::Mat take_colour(const py::handle& object, const PinholeIntrinsics& k, bool bgr, bool& memory_is_rgb) {
-  if (object.is_none()) return {};
-  const std::string expected = std::string("None or a uint8 array of shape ") + shape_text(k, 3) + " in " +
+  const std::string expected = std::string("a uint8 array of shape ") + shape_text(k, 3) + " in " +
                                (bgr ? "BGR" : "RGB") + " order (the camera's colour size)";
   if (!py::isinstance<py::array>(object)) bad_argument("rgb", expected, object);
   auto array = py::reinterpret_borrow<py::array>(object);

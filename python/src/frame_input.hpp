@@ -15,7 +15,7 @@
 namespace semap::python {
 
 struct FrameArrays {
-  cv::Mat colour;               ///< CV_8UC3 sharing the caller's array (empty: no colour)
+  cv::Mat colour;               ///< CV_8UC3 sharing the caller's array
   bool colour_is_rgb = false;   ///< the memory is in RGB order (converted in to_frame)
   cv::Mat depth;                ///< CV_16UC1 raw units or CV_32FC1 metres, shared
   cv::Mat labels, instances;    ///< CV_8UC1 / CV_16UC1, shared (or empty)
