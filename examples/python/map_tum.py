@@ -74,6 +74,9 @@ def main(argv=None):
     parser.add_argument("--show", action="store_true", help="show the mesh with Open3D")
     args = parser.parse_args(argv)
 
+    for name in ("rgb.txt", "depth.txt"):
+        if not (args.dataset / name).is_file():
+            sys.exit("map_tum: %s not found (DATASET must be a TUM RGB-D folder)" % (args.dataset / name))
     pairs = associate(read_file_list(args.dataset / "rgb.txt"), read_file_list(args.dataset / "depth.txt"))
     if args.max_frames:
         pairs = pairs[:args.max_frames]
