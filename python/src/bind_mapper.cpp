@@ -144,9 +144,10 @@ void bind_mapper(py::module_& m) {
       .def("add_frame", &PyMapper::add_frame, py::arg("rgb"), py::arg("depth"), py::arg("timestamp"),
            py::arg("labels") = py::none(), py::arg("instances") = py::none(), py::arg("pose") = py::none(),
            py::kw_only(), py::arg("bgr") = false,
-           "Tracks (or takes `pose`), segments and fuses one frame. rgb: uint8 (H, W, 3) in RGB order (BGR "
-           "with bgr=True); depth: uint16 raw units or float32 metres (H, W). The arrays are referenced, "
-           "not copied: do not write into them afterwards.")
+           "Tracks (or takes `pose`, a (4, 4) T_world_camera), segments and fuses one frame. rgb: uint8 "
+           "(H, W, 3) in RGB order (BGR with bgr=True); depth: uint16 raw units or float32 metres (H, W); "
+           "labels: uint8 class ids and instances: uint16 ids (H, W, depth size), the caller's own "
+           "segmentation. The arrays are referenced, not copied: do not write into them afterwards.")
       .def("finish", &PyMapper::finish, "final pose graph, map refresh, final object pass (idempotent)")
       .def("save", &PyMapper::save, py::arg("out_dir"),
            "trajectory.txt, mesh.ply, objects.json + objects/*.ply, map.semap (what `semap run` writes)")
