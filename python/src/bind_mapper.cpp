@@ -1,0 +1,163 @@
+// semap.Mapper: semap::Mapper with numpy in and out. Every call into the Mapper runs with the
+// GIL released (numpy_mat.hpp says why); add_frame/finish/save are serialised by a mutex (the
+// Mapper's driver calls), the read accessors are not (the Mapper makes them thread-safe).
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <chrono>
+#include <filesystem>
+#include <mutex>
+
+#include "bindings.hpp"
+#include "bound_types.hpp"
+#include "config.hpp"
+#include "frame_input.hpp"
+#include "numpy_mat.hpp"
+#include "semap/io/config_loader.hpp"
+#include "semap/pipeline/outputs.hpp"
+
+namespace semap::python {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+class PyMapper {
+ public:
+  PyMapper(const CameraModel& camera, const py::handle& config, const py::handle& segmenter) {
+    SemapConfig c = config_from_python(config);
+    if (!segmenter.is_none()) {
+      if (!py::isinstance<py::str>(segmenter))
+        bad_argument("segmenter", "None or a spec: yolo:MODEL.onnx | semantic:MODEL.onnx | precomputed:DIR | none",
+                     segmenter);
+      c.segmentation.segmenter = segmenter.cast<std::string>();
+    }
+    py::gil_scoped_release nogil;  // a network segmenter loads its model
+    mapper_ = std::make_unique<Mapper>(c, camera);
+  }
+  ~PyMapper() {
+    py::gil_scoped_release nogil;  // workers drain their queues and release frames (GIL)
+    mapper_.reset();
+  }
+
+  PyFrameResult add_frame(const py::handle& rgb, const py::handle& depth, double timestamp, const py::handle& labels,
+                          const py::handle& instances, const py::handle& pose, bool bgr) {
+    const auto t0 = Clock::now();
+    const FrameArrays arrays = take_frame_arrays(mapper_->camera(), rgb, depth, timestamp, labels, instances, pose, bgr);
+    PyFrameResult out;
+    {
+      py::gil_scoped_release nogil;
+      std::lock_guard lock(driver_mutex_);
+      FrameHints hints;
+      const Frame frame = to_frame(arrays, mapper_->camera(), next_index_, hints);
+      out.result = mapper_->add_frame(frame, std::move(hints));
+      ++next_index_;
+    }
+    out.binding_ms = ms_since(t0) - out.result.total_ms;
+    return out;
+  }
+
+  void finish() {
+    py::gil_scoped_release nogil;
+    std::lock_guard lock(driver_mutex_);
+    mapper_->finish();
+  }
+
+  void save(const std::filesystem::path& dir) {
+    py::gil_scoped_release nogil;
+    std::lock_guard lock(driver_mutex_);
+    write_map_outputs(*mapper_, dir);
+  }
+
+  py::list trajectory() const {
+    Trajectory t;
+    {
+      py::gil_scoped_release nogil;
+      t = mapper_->trajectory();
+    }
+    return trajectory_to_python(t);
+  }
+
+  PyMesh mesh() const {
+    py::gil_scoped_release nogil;
+    return PyMesh{mapper_->mesh()};
+  }
+
+  std::vector<ObjectSummary> objects() const {
+    py::gil_scoped_release nogil;
+    return mapper_->objects();
+  }
+
+  py::dict stats() const {
+    MapperStats s;
+    {
+      py::gil_scoped_release nogil;
+      s = mapper_->stats();
+    }
+    py::dict d;
+    d["frames"] = s.frames, d["frames_fused"] = s.frames_fused, d["keyframes"] = s.keyframes;
+    d["lost_frames"] = s.lost_frames, d["relocalisations"] = s.relocalisations, d["loop_edges"] = s.loop_edges;
+    d["optimisations"] = s.optimisations, d["segmented_frames"] = s.segmented_frames;
+    d["segmentations_dropped"] = s.segmentations_dropped, d["segmentations_failed"] = s.segmentations_failed;
+    d["segmentation_error"] = s.segmentation_error, d["object_frames"] = s.object_frames, d["objects"] = s.objects;
+    d["finished"] = s.finished, d["map_refreshed"] = s.map_refreshed, d["map_refresh_note"] = s.map_refresh_note;
+    d["max_pose_correction_m"] = s.max_pose_correction_m, d["external_poses"] = s.external_poses;
+    d["segmenter"] = s.segmenter;
+    return d;
+  }
+
+  py::dict timings() const {
+    std::map<std::string, TimingSummary> t;
+    {
+      py::gil_scoped_release nogil;
+      t = mapper_->timings();
+    }
+    py::dict d;
+    for (const auto& [stage, s] : t) {
+      py::dict e;
+      e["count"] = s.count, e["mean_ms"] = s.mean_ms, e["median_ms"] = s.median_ms, e["p95_ms"] = s.p95_ms;
+      e["total_ms"] = s.total_ms;
+      d[py::str(stage)] = e;
+    }
+    return d;
+  }
+
+  const CameraModel& camera() const { return mapper_->camera(); }
+  std::string config_yaml() const {
+    SemapConfig c = mapper_->config();
+    return dump_config([&](ParamVisitor& v) { c.visit(v); });
+  }
+
+ private:
+  std::unique_ptr<Mapper> mapper_;
+  std::mutex driver_mutex_;
+  size_t next_index_ = 0;
+};
+
+}  // namespace
+
+void bind_mapper(py::module_& m) {
+  py::class_<PyMapper>(m, "Mapper", "semap::Mapper: frames in; poses, a labelled mesh and objects out.")
+      .def(py::init<const CameraModel&, const py::handle&, const py::handle&>(), py::arg("camera"),
+           py::arg("config") = py::none(), py::arg("segmenter") = py::none())
+      .def("add_frame", &PyMapper::add_frame, py::arg("rgb"), py::arg("depth"), py::arg("timestamp"),
+           py::arg("labels") = py::none(), py::arg("instances") = py::none(), py::arg("pose") = py::none(),
+           py::kw_only(), py::arg("bgr") = false,
+           "Tracks (or takes `pose`, a (4, 4) T_world_camera), segments and fuses one frame. rgb: uint8 "
+           "(H, W, 3) in RGB order (BGR with bgr=True); depth: uint16 raw units or float32 metres (H, W); "
+           "labels: uint8 class ids and instances: uint16 ids (H, W, depth size), the caller's own "
+           "segmentation. The arrays are referenced, not copied: do not write into them afterwards.")
+      .def("finish", &PyMapper::finish, "final pose graph, map refresh, final object pass (idempotent)")
+      .def("save", &PyMapper::save, py::arg("out_dir"),
+           "trajectory.txt, mesh.ply, objects.json + objects/*.ply, map.semap (what `semap run` writes)")
+      .def("trajectory", &PyMapper::trajectory, "list of (timestamp, (4, 4) T_world_camera)")
+      .def("mesh", &PyMapper::mesh, "the labelled mesh now")
+      .def("objects", &PyMapper::objects, "the object map now")
+      .def("stats", &PyMapper::stats)
+      .def("timings", &PyMapper::timings, "per stage: count, mean_ms, median_ms, p95_ms, total_ms")
+      .def_property_readonly("camera", &PyMapper::camera)
+      .def("config_yaml", &PyMapper::config_yaml, "the configuration in use, as YAML");
+}
+
+}  // namespace semap::python

@@ -1,0 +1,82 @@
+#include "config.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <filesystem>
+
+#include "numpy_mat.hpp"
+#include "semap/io/config_loader.hpp"
+
+namespace semap::python {
+namespace {
+
+constexpr const char* kSource = "config dict";
+
+/// Writes one Python value as YAML: dicts as maps, lists/tuples as sequences, scalars quoted
+/// or plain so that the loader reads back the same type (bool before int: True is an int).
+void emit(YAML::Emitter& out, const py::handle& value, const std::string& key) {
+  if (py::isinstance<py::dict>(value)) {
+    out << YAML::BeginMap;
+    for (const auto& [k, v] : py::reinterpret_borrow<py::dict>(value)) {
+      if (!py::isinstance<py::str>(k))
+        throw py::value_error(std::string(kSource) + ": keys must be strings, got " + describe(k) +
+                              (key.empty() ? "" : " under '" + key + "'"));
+      const std::string name = k.cast<std::string>();
+      out << YAML::Key << name << YAML::Value;
+      emit(out, v, key.empty() ? name : key + "." + name);
+    }
+    out << YAML::EndMap;
+  } else if (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value)) {
+    out << YAML::BeginSeq;
+    for (const auto& item : value) emit(out, item, key);
+    out << YAML::EndSeq;
+  } else if (py::isinstance<py::bool_>(value) || py::isinstance(value, py::module_::import("numpy").attr("bool_"))) {
+    out << (value.cast<bool>() ? "true" : "false");
+  } else if (py::isinstance<py::str>(value)) {
+    out << YAML::DoubleQuoted << value.cast<std::string>();
+  } else if (PyIndex_Check(value.ptr())) {  // int, numpy integers
+    out << py::str(py::reinterpret_steal<py::object>(PyNumber_Index(value.ptr()))).cast<std::string>();
+  } else if (PyFloat_Check(value.ptr()) || py::hasattr(value, "__float__")) {  // float, numpy floats
+    out << YAML::Precision(17) << value.cast<double>();
+  } else if (value.is_none()) {
+    out << YAML::Null;
+  } else {
+    throw py::value_error(std::string(kSource) + ": config key '" + key + "' has a value of type " + describe(value) +
+                          " (expected a dict, list, bool, int, float or str)");
+  }
+}
+
+/// The CLI's defaults, except that the mesh carries the surfaces' RGB colours (issue 15:
+/// mesh.colors), not the class palette (mesh.labels and semap.class_colors() give that).
+SemapConfig python_defaults() {
+  SemapConfig c;
+  c.tsdf.colour_layer = true;
+  c.tsdf.mesh_colour = "rgb";
+  return c;
+}
+
+}  // namespace
+
+SemapConfig config_from_python(const py::handle& config) {
+  SemapConfig c = python_defaults();
+  const ParamTree tree = [&](ParamVisitor& v) { c.visit(v); };
+  if (config.is_none()) return c;
+  if (py::isinstance<py::dict>(config)) {
+    YAML::Emitter out;
+    emit(out, config, "");
+    load_config_string(out.c_str(), kSource, tree);
+    c.validate();
+    return c;
+  }
+  const py::object fspath = py::module_::import("os").attr("fspath");
+  if (py::isinstance<py::str>(config) || py::hasattr(config, "__fspath__")) {
+    const std::string path = fspath(config).cast<std::string>();
+    if (path.empty()) throw py::value_error("config: empty path (None gives the defaults)");
+    load_config_file(path, tree);
+    c.validate();
+    return c;
+  }
+  bad_argument("config", "None, a dict with the YAML's keys or the path of a YAML file", config);
+}
+
+}  // namespace semap::python

@@ -1,0 +1,76 @@
+// The _semap extension module; `import semap` loads it through python/semap/__init__.py.
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include <filesystem>
+
+#include "bindings.hpp"
+#include "semap/core/error.hpp"
+#include "semap/core/labels.hpp"
+#include "semap/eval/trajectory_metrics.hpp"
+#include "semap/io/trajectory_io.hpp"
+#include "semap/pipeline/semap_config.hpp"
+
+namespace py = pybind11;
+
+namespace semap::python {
+namespace {
+
+py::object json_to_python(const nlohmann::json& j) { return py::module_::import("json").attr("loads")(j.dump()); }
+
+py::dict evaluate_ate(const std::filesystem::path& gt, const std::filesystem::path& est, double max_dt) {
+  nlohmann::json j;
+  {
+    py::gil_scoped_release nogil;
+    j = to_json(compute_ate(read_tum_trajectory(gt), read_tum_trajectory(est), max_dt));
+  }
+  return json_to_python(j);
+}
+
+py::dict evaluate_rpe(const std::filesystem::path& gt, const std::filesystem::path& est, double delta_s, double max_dt) {
+  nlohmann::json j;
+  {
+    py::gil_scoped_release nogil;
+    j = to_json(compute_rpe(read_tum_trajectory(gt), read_tum_trajectory(est), delta_s, max_dt));
+  }
+  return json_to_python(j);
+}
+
+std::vector<std::string> class_names() {
+  std::vector<std::string> names;
+  for (int c = 0; c < kNumClasses; ++c) names.emplace_back(class_name(static_cast<ClassId>(c)));
+  return names;
+}
+
+py::array_t<uint8_t> class_colors() {
+  py::array_t<uint8_t> out({kNumClasses, 3});
+  for (int c = 0; c < kNumClasses; ++c) {
+    const Rgb8 rgb = class_colour(static_cast<ClassId>(c));
+    out.mutable_at(c, 0) = rgb.r, out.mutable_at(c, 1) = rgb.g, out.mutable_at(c, 2) = rgb.b;
+  }
+  return out;
+}
+
+}  // namespace
+}  // namespace semap::python
+
+PYBIND11_MODULE(_semap, m) {
+  using namespace semap::python;
+  m.doc() = "semap: RGB-D semantic mapping (C++ core, numpy in and out)";
+  m.attr("__version__") = SEMAP_VERSION;
+  // Every semap::Error (bad file, bad config key, bad camera, add_frame after finish) is a
+  // semap.Error, a ValueError.
+  py::register_exception<semap::Error>(m, "Error", PyExc_ValueError);
+  bind_types(m);
+  bind_mapper(m);
+  bind_dataset(m);
+  m.def("evaluate_ate", &evaluate_ate, py::arg("gt_path"), py::arg("est_path"), py::arg("max_dt") = 0.02,
+        "ATE of two TUM trajectory files (TUM benchmark definitions): rmse_m, mean_m, median_m, max_m, matched, "
+        "T_gt_est");
+  m.def("evaluate_rpe", &evaluate_rpe, py::arg("gt_path"), py::arg("est_path"), py::arg("delta_s") = 1.0,
+        py::arg("max_dt") = 0.02, "RPE over delta_s seconds: trans_rmse_m_per_s, rot_rmse_deg_per_s, ...");
+  m.def("class_names", &class_names, "the project's classes; index = class id");
+  m.def("class_colors", &class_colors, "(C, 3) uint8 palette; row = class id");
+  m.def("default_config", &semap::dump_default_config, "YAML of every parameter with its default");
+}
