@@ -9,7 +9,8 @@ PACKAGES=(
   nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev libyaml-cpp-dev
   libgtest-dev libgmock-dev libbenchmark-dev libnanoflann-dev
   libopen3d-dev libcpp-httplib-dev libdeflate-dev
-  librosbag-storage-dev libsensor-msgs-dev libopenni2-dev
+  librosbag-storage-dev libsensor-msgs-dev libopenni2-dev libopencv-contrib-dev
+  pybind11-dev python3-dev python3-numpy python3-pytest python3-opencv python3-open3d
 )
 # Extra packages can be requested by callers, e.g. the CI adds clang for fuzzing.
 PACKAGES+=("$@")

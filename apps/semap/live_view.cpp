@@ -6,6 +6,8 @@
 #include "semap/core/error.hpp"
 #include "semap/io/ply_io.hpp"
 #include "semap/io/trajectory_io.hpp"
+// After Eigen: cpp-httplib brings <resolv.h>, whose `_res` macro breaks Eigen's headers.
+#include "apps/semap/viewer_server.hpp"
 
 #ifdef SEMAP_HAVE_VIEWER_ASSETS
 #include "viewer/viewer_assets.hpp"
@@ -79,15 +81,20 @@ LiveView::LiveView(const std::string& host, int port, std::chrono::milliseconds 
 }
 
 LiveView::~LiveView() {
+  bool showed_final_map;
   {
     std::lock_guard lock(mapper_mutex_);
     stopping_ = true;
+    showed_final_map = final_snapshot_;
   }
+  // The page polls every refresh: leave it time to load the finished map before closing.
+  if (showed_final_map) std::this_thread::sleep_for(2 * refresh_);
   wake_.notify_all();
   if (snapshot_thread_.joinable()) snapshot_thread_.join();
 #ifdef SEMAP_HAVE_HTTPLIB
   if (server_) server_->stop();
 #endif
+  server_.reset();
 }
 
 void LiveView::observe(const Mapper* mapper) {
@@ -95,6 +102,7 @@ void LiveView::observe(const Mapper* mapper) {
   if (!mapper && mapper_) {
     try {
       take_snapshot(*mapper_);  // the finished map
+      final_snapshot_ = true;
     } catch (const std::exception& e) {
       std::fprintf(stderr, "semap run: live view: %s\n", e.what());
     }

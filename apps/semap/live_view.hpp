@@ -13,10 +13,11 @@
 #include <string>
 #include <thread>
 
-#include "apps/semap/viewer_server.hpp"
 #include "semap/mapper.hpp"
 
 namespace semap::app {
+
+class ViewerServer;  // apps/semap/viewer_server.hpp (cpp-httplib stays out of this header)
 
 class LiveView {
  public:
@@ -27,7 +28,8 @@ class LiveView {
   LiveView& operator=(const LiveView&) = delete;
 
   /// RunOptions::observe_mapper. With a Mapper: snapshots start. With nullptr: one last
-  /// snapshot of the finished map is taken, then the Mapper is never touched again.
+  /// snapshot of the finished map is taken, then the Mapper is never touched again (the
+  /// destructor then serves it two more refresh intervals, for the page to load it).
   void observe(const Mapper* mapper);
   /// Snapshots taken so far.
   size_t snapshots() const;
@@ -49,10 +51,9 @@ class LiveView {
   const Mapper* mapper_ = nullptr;
   std::condition_variable wake_;
   bool stopping_ = false;
+  bool final_snapshot_ = false;
   size_t version_ = 0;
-#ifdef SEMAP_HAVE_HTTPLIB
   std::unique_ptr<ViewerServer> server_;
-#endif
   std::thread snapshot_thread_;
 };
 

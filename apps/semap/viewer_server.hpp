@@ -50,6 +50,8 @@ class ViewerServer {
   int port_ = 0;
   std::thread thread_;
 };
+#else
+class ViewerServer {};  // built without cpp-httplib: never constructed
 #endif
 
 }  // namespace semap::app

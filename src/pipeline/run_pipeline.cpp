@@ -237,6 +237,8 @@ RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
   const ObserverScope observed(options.observe_mapper, mapper);
 
   const auto [fed, skipped] = feed_frames(mapper, *source, options);
+  // Ctrl-C before any frame was mapped: there is no map to finish; publish nothing.
+  if (fed == 0 && options.stop_requested && options.stop_requested()) throw_if_interrupted();
   const double online_s = seconds_since(wall_start);
   mapper.finish();
   const MapOutputs outputs = collect_outputs(mapper);

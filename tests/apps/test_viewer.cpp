@@ -348,14 +348,14 @@ TEST(Viewer, LiveViewShowsTheMapGrowingDuringSemapRun) {
   fs::remove_all(shots);
   fs::create_directories(shots);
   BackgroundServer run(shell_quote(semap_executable().string()) + " run " + shell_quote(tum.string()) + " --out " +
-                           shell_quote(out.string()) + " --view --port 0 --view-refresh-ms 1000 --threads 2 --no-eval",
+                           shell_quote(out.string()) + " --view --port 0 --view-refresh-ms 500 --threads 2 --no-eval",
                        log);
   const std::string url = wait_for_url(run, log);
   ASSERT_FALSE(url.empty()) << "semap run --view printed no URL:\n" << read_file(log);
   const auto browser = run_command("cd " + shell_quote(std::string(SEMAP_VIEWER_SOURCE_DIR)) +
                                    " && timeout 180 node test/screenshot.mjs --url " + shell_quote(url) + " --out " +
                                    shell_quote(shots.string()) + " --chromium " + shell_quote(chromium_path()) +
-                                   " --live-gap-ms 3000");
+                                   " --live-gap-ms 2000");
   EXPECT_EQ(browser.exit_code, 0) << browser.output;
   EXPECT_EQ(run.wait(std::chrono::seconds(300)), 0) << read_file(log);
   EXPECT_TRUE(fs::is_regular_file(out / "mesh.ply")) << "the run publishes its outputs as without --view";

@@ -1,7 +1,8 @@
 """Shared fixtures of the semap Python tests (issue 15).
 
 Real data comes from SEMAP_DATA_DIR (default ../shared/data beside the repository, or
-SEMAP_SHARED_DIR/data as ctest passes it); tests whose data is absent are skipped.
+SEMAP_SHARED_DIR/data as ctest passes it); tests whose data is absent are skipped, or fail
+under CI=true (as the C++ tests do: tests/test_support.hpp, issue 21).
 """
 import os
 import pathlib
@@ -29,8 +30,15 @@ def data_dir():
 def require_data(name):
     path = data_dir() / name
     if not path.exists():
-        pytest.skip("shared data missing: %s" % path)
+        skip_or_fail("shared data missing: %s (set SEMAP_DATA_DIR)" % path)
     return path
+
+
+def skip_or_fail(message):
+    """Skips the calling test, or fails it under CI=true (a missing prerequisite is a CI error)."""
+    if os.environ.get("CI") == "true":
+        pytest.fail(message + " (CI=true: this must not be missing)")
+    pytest.skip(message)
 
 
 def synthetic_camera():

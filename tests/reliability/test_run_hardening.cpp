@@ -95,7 +95,7 @@ TEST_F(RunHardening, CtrlCLeavesNothingThatLooksComplete) {
   const auto output_started = [](const fs::path& out, const std::map<std::string, std::string>& before) {
     for (const auto& f : tree(out)) {
       const std::string name = fs::path(f).filename().string();
-      if (!before.count(f) && name != ".semap-output" && name != ".semap-staging") return true;
+      if (!before.count(f) && !OutputFolder::is_internal_name(name)) return true;
     }
     return false;
   };

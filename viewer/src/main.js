@@ -578,6 +578,8 @@ async function main() {
 
 // Polls the run's state; when a new snapshot is out, loads the map again. The camera is fitted
 // again only while the map outgrows the view (the user's own view is kept otherwise).
+let stopLive = () => {};
+
 function startLive(live, files, floorId, fittedBounds) {
   const line = document.createElement('div');
   line.className = 'msg';
@@ -592,7 +594,8 @@ function startLive(live, files, floorId, fittedBounds) {
     try {
       const s = await fetchChecked(live.state, 'json');
       line.textContent = `live: ${s.frames} frames, ${Number(s.fps).toFixed(1)} fps, ${s.objects} objects` +
-        (s.finished ? ' (finished)' : '');
+        (s.finished ? ' (finished: the run is writing its outputs)' : '');
+      if (s.finished) stopLive();  // the last snapshot: the server closes with the run
       if (s.version !== version) {
         version = s.version;
         clearMap();
@@ -612,7 +615,8 @@ function startLive(live, files, floorId, fittedBounds) {
     }
   };
   poll();
-  setInterval(poll, Math.max(200, Number(live.interval_ms) || 1500));
+  const timer = setInterval(poll, Math.max(200, Number(live.interval_ms) || 1500));
+  stopLive = () => clearInterval(timer);
 }
 
 function finish() {
