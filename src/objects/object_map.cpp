@@ -127,16 +127,17 @@ std::vector<std::pair<float, size_t>> ObjectMap::gate(const std::vector<Eigen::V
   for (const auto& p : points) sum += p.cast<double>(), box.extend(p);
   const Eigen::Vector3f centroid = (sum / static_cast<double>(points.size())).cast<float>();
   const float margin = static_cast<float>(config_.association_box_margin);
+  const bool extent = config_.association_gate == AssociationGate::extent;
   std::vector<std::pair<float, size_t>> candidates;
   for (size_t j = 0; j < instances_.size(); ++j) {
     const ObjectInstance& inst = instances_[j];
     if (only_class && inst.class_id() != *only_class) continue;
     const float d = (inst.centroid() - centroid).norm();
-    // Extension to C4: a large object seen in parts has its centroid far from a part's; its
-    // extent still meets the part's.
-    const bool boxes_meet = margin > 0.f && !inst.bounds.isEmpty() &&
-                            inst.bounds.exteriorDistance(box) <= margin;
-    if (d < config_.association_distance || boxes_meet) candidates.emplace_back(d, j);
+    // Extension to C4 (extent gate): candidates are the instances the segment touches, whatever
+    // their size; a large object seen in parts has its centroid far from a part's.
+    const bool pass = extent ? !inst.bounds.isEmpty() && inst.bounds.exteriorDistance(box) <= margin
+                             : d < config_.association_distance;
+    if (pass) candidates.emplace_back(d, j);
   }
   std::sort(candidates.begin(), candidates.end());
   return candidates;
@@ -167,8 +168,11 @@ void ObjectMap::associate(const std::vector<ObjectSegment>& segments, size_t fra
     std::vector<Eigen::Vector3f> points;
     std::vector<Rgb8> colours;
     downsample(segment, points, colours);
-    // C4: candidates inside the centroid gate, nearest first.
-    const std::vector<std::pair<float, size_t>> candidates = gate(points, std::nullopt);
+    // C4: candidates inside the gate, nearest first; with association_class_share only those
+    // whose evidence admits the segment's class (a mug is no candidate of the table it is on,
+    // so the table's association count says how often the table was seen).
+    std::vector<std::pair<float, size_t>> candidates = gate(points, std::nullopt);
+    std::erase_if(candidates, [&](const auto& c) { return !accepts_class(instances_[c.second], segment.class_id); });
     for (size_t a = 0; a < candidates.size(); ++a) {
       auto& inst = instances_[candidates[a].second];
       ++inst.association_count;
@@ -258,6 +262,22 @@ void ObjectMap::apply_pose_corrections(const std::unordered_map<uint32_t, Eigen:
   }
 }
 
+std::vector<double> ObjectMap::label_distribution(const ObjectInstance& instance) const {
+  return config_.merge_distribution == MergeDistribution::augmented ? instance.mean_scores()
+                                                                     : evidence_shares(instance.score_sum);
+}
+
+bool ObjectMap::accepts_class(const ObjectInstance& instance, ClassId cls) const {
+  if (config_.association_class_share <= 0.0) return true;
+  const double total = std::accumulate(instance.score_sum.begin(), instance.score_sum.end(), 0.0);
+  if (!(total > 0.0) || cls >= instance.score_sum.size()) return true;
+  return instance.score_sum[cls] >= config_.association_class_share * total;
+}
+
+double ObjectMap::label_divergence(const ObjectInstance& a, const ObjectInstance& b) const {
+  return js_divergence(label_distribution(a), label_distribution(b));
+}
+
 void ObjectMap::add_scores(ObjectInstance& instance, const std::vector<double>& scores) {
   for (size_t k = 0; k < instance.score_sum.size() && k < scores.size(); ++k) instance.score_sum[k] += scores[k];
   instance.decided_class = evidence_class(instance.score_sum, config_.class_min_share);
@@ -290,7 +310,7 @@ void ObjectMap::absorb_fragment(size_t i, const std::vector<char>& remove, Optim
     if (j == i || remove[j] || instances_[j].state != InstanceState::kStable) continue;
     if ((instances_[j].centroid() - inst.centroid()).norm() >= config_.association_distance) continue;
     const double o = overlap(inst.points, instances_[j], config_.overlap_distance);
-    if (o >= best_overlap && js_divergence(inst.mean_scores(), instances_[j].mean_scores()) <= config_.merge_max_js)
+    if (o >= best_overlap && label_divergence(inst, instances_[j]) <= config_.merge_max_js)
       best = j, best_overlap = o;
   }
   if (best == instances_.size()) return;
@@ -352,7 +372,7 @@ void ObjectMap::merge_stable_pairs(std::vector<char>& remove, OptimisationStats&
         if (co <= 0 || co <= config_.merge_coassociation * s_min) continue;
         ++stats.pairs_checked;
         if (!geometric_overlap(a, b)) continue;                                               // (3)
-        if (js_divergence(a.mean_scores(), b.mean_scores()) > config_.merge_max_js) continue;  // (4)
+        if (label_divergence(a, b) > config_.merge_max_js) continue;  // (4)
         // Keep the instance with more merges (its id is the better established one).
         const bool keep_a = a.n >= b.n;
         merge_into(keep_a ? a : b, keep_a ? b : a);

@@ -101,6 +101,12 @@ class ObjectMap {
   void add_points(ObjectInstance& instance, const std::vector<Eigen::Vector3f>& points, const std::vector<Rgb8>& colours,
                   const std::vector<uint32_t>& frames);
   void merge_into(ObjectInstance& target, ObjectInstance& source);
+  /// Extension to C4 (association_class_share): the instance's evidence gives `cls` enough share
+  /// for a segment of that class to merge into it.
+  bool accepts_class(const ObjectInstance& instance, ClassId cls) const;
+  /// The distribution C5 test (4) compares (config merge_distribution).
+  std::vector<double> label_distribution(const ObjectInstance& instance) const;
+  double label_divergence(const ObjectInstance& a, const ObjectInstance& b) const;
   /// Adds a segment's class scores to the instance's evidence and re-decides its class.
   void add_scores(ObjectInstance& instance, const std::vector<double>& scores);
   /// C5 test (3): the smaller instance's points lie on the larger's surface (C4 overlap) or,
@@ -112,9 +118,9 @@ class ObjectMap {
   void absorb_fragment(size_t i, const std::vector<char>& remove, OptimisationStats& stats);
   /// C5 merge of stable pairs (tests 1-4), until no pair merges.
   void merge_stable_pairs(std::vector<char>& remove, OptimisationStats& stats);
-  /// C4 gate: (centroid distance, index) of the instances whose centroid is within
-  /// association_distance of the centroid of `points` or (extension, association_box_margin)
-  /// whose box meets the points' box, nearest first; only_class keeps instances of that class.
+  /// C4 gate (config association_gate): (centroid distance, index) of the instances whose
+  /// centroid is within association_distance of the centroid of `points`, or whose box grown by
+  /// association_box_margin meets the points' box; nearest first; only_class keeps that class.
   std::vector<std::pair<float, size_t>> gate(const std::vector<Eigen::Vector3f>& points,
                                              std::optional<ClassId> only_class) const;
 

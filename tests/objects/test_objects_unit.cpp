@@ -153,7 +153,9 @@ ObjectsConfig toy_config() {
 }  // namespace
 
 TEST(ObjectsMap, AssociationMergesOrCreates) {
-  ObjectMap map(toy_config());
+  ObjectsConfig c = toy_config();
+  c.association_gate = AssociationGate::centroid;  // C4 as printed
+  ObjectMap map(c);
   const ClassId cup = id(Label::kCup);
   map.associate({cube_segment({0, 0, 0}, 0.1f, cup)}, 0, 1);
   ASSERT_EQ(map.instances().size(), 1u);
@@ -434,8 +436,9 @@ TEST(ObjectsMap, ClassIsDecidedByEvidenceWithOtherWhenUndecided) {
   const auto shares = evidence_shares(scores);
   EXPECT_NEAR(shares[id(Label::kTable)] + shares[id(Label::kDesk)], 1.0, 1e-12);
 
-  // The instance's class follows its evidence as segments arrive.
+  // The instance's class follows its evidence as segments arrive (any class may merge here).
   ObjectsConfig c = toy_config();
+  c.association_class_share = 0.0;
   ObjectMap map(c);
   const ClassId table = id(Label::kTable), other = id(Label::kOther);
   map.associate({cube_segment({0, 0, 0}, 0.2f, table)}, 0, 1);
@@ -460,15 +463,41 @@ TEST(ObjectsMap, AssociationUsesTheInstanceExtent) {
     s.class_scores[s.class_id] = 1.0;
     return s;
   };
-  for (const double margin : {0.05, 0.0}) {
+  for (const AssociationGate gate : {AssociationGate::extent, AssociationGate::centroid}) {
     ObjectsConfig c = toy_config();
     c.association_distance = 0.5;
-    c.association_box_margin = margin;
+    c.association_gate = gate;
     ObjectMap map(c);
     map.associate({slab(0.0f, 1.2f)}, 0, 1);   // centroid x 0.6
     map.associate({slab(0.75f, 1.6f)}, 1, 2);  // centroid x 1.18 (0.58 m off); 56 % on the first
-    SCOPED_TRACE(margin);
-    EXPECT_EQ(map.instances().size(), margin > 0 ? 1u : 2u);  // centroid gate only: a duplicate table
+    SCOPED_TRACE(std::string(enum_name(kAssociationGateNames, gate)));
+    EXPECT_EQ(map.instances().size(), gate == AssociationGate::extent ? 1u : 2u);  // centroid gate: a duplicate
+  }
+  // The extent gate counts the instances a segment touches, not every one within 1 m: a cup
+  // 0.3 m from another is not its candidate, so its association count says how often it was seen.
+  ObjectMap map(toy_config());
+  const ClassId cup = id(Label::kCup);
+  map.associate({cube_segment({0, 0, 0}, 0.1f, cup)}, 0, 1);
+  map.associate({cube_segment({0.3f, 0, 0}, 0.1f, cup)}, 1, 2);
+  map.associate({cube_segment({0.3f, 0, 0}, 0.1f, cup)}, 2, 3);
+  ASSERT_EQ(map.instances().size(), 2u);
+  EXPECT_EQ(map.instances()[0].association_count, 1);
+  EXPECT_EQ(map.instances()[1].association_count, 2);
+  EXPECT_TRUE(map.instances()[0].co_association.empty());
+}
+
+// Extension to C4 (association_class_share): a mug whose mask bleeds onto the table overlaps the
+// table's surface more than r, but the table's evidence has no cup in it: a new instance.
+TEST(ObjectsMap, SegmentMergesOnlyIntoAnInstanceWithEvidenceForItsClass) {
+  for (const double share : {0.2, 0.0}) {
+    ObjectsConfig c = toy_config();
+    c.association_class_share = share;
+    c.reverse_containment = false;
+    ObjectMap map(c);
+    map.associate({cube_segment({0, 0, 0}, 0.3f, id(Label::kTable))}, 0, 1);
+    map.associate({cube_segment({0.02f, 0.02f, 0.02f}, 0.26f, id(Label::kCup))}, 1, 2);
+    SCOPED_TRACE(share);
+    EXPECT_EQ(map.instances().size(), share > 0 ? 2u : 1u);
   }
 }
 

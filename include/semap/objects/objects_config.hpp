@@ -10,6 +10,22 @@ enum class SegmentationMode { supervoxel, backprojection };
 inline constexpr EnumNames<SegmentationMode, 2> kSegmentationModeNames{
     {{SegmentationMode::supervoxel, "supervoxel"}, {SegmentationMode::backprojection, "backprojection"}}};
 
+/// C4: which instances are a segment's candidates (and have their association count raised).
+enum class AssociationGate {
+  centroid,  ///< as printed: centroid distance below association_distance
+  extent,    ///< the instance's box, grown by association_box_margin, meets the segment's box
+};
+inline constexpr EnumNames<AssociationGate, 2> kAssociationGateNames{
+    {{AssociationGate::centroid, "centroid"}, {AssociationGate::extent, "extent"}}};
+
+/// C5 test (4): the label distributions the Jensen-Shannon divergence compares.
+enum class MergeDistribution {
+  augmented,  ///< as printed: mean scores with the residual 1 - sum as component 0 ("other")
+  evidence,   ///< the classes' shares of the summed scores (the residual left out)
+};
+inline constexpr EnumNames<MergeDistribution, 2> kMergeDistributionNames{
+    {{MergeDistribution::augmented, "augmented"}, {MergeDistribution::evidence, "evidence"}}};
+
 /// Parameters of the object map (METHODS.md C2-C5).
 struct ObjectsConfig {
   // --- C2: per-keyframe segmentation ---
@@ -42,7 +58,11 @@ struct ObjectsConfig {
   // --- C3/C4: map and association ---
   double map_voxel_size = 0.01;       ///< m, instance point sets are voxel-downsampled to this
   double association_distance = 1.0;  ///< m, d_assoc: centroid distance gate (C4)
-  double association_box_margin = 0.05;  ///< m, extension to C4: instances whose box (grown by this) meets the segment's box are candidates too
+  /// Extent by default: with the 1 m centroid gate every instance of a cluttered kitchen is a
+  /// candidate of dozens of segments, so s_i grew for all of them and C5 never deleted one.
+  AssociationGate association_gate = AssociationGate::extent;
+  double association_box_margin = 0.05;  ///< m, extent gate: the instance's box is grown by this
+  double association_class_share = 0.2;  ///< a segment merges only into an instance whose evidence gives its class this share (0: any class, as printed)
   double overlap_distance = 0.03;     ///< m, d_point: a segment point overlaps when an instance point is this close
   double overlap_ratio = 0.5;         ///< r: overlap fraction above which a segment merges (C4)
   bool reverse_containment = true;    ///< extension: also merge when the segment covers an instance of its class
@@ -59,7 +79,11 @@ struct ObjectsConfig {
   double merge_coassociation = 0.7; ///< co-association count must exceed this fraction of s_i or s_j
   double merge_overlap_ratio = 0.3; ///< geometric overlap (C4 formula, smaller onto larger) needed to merge
   double merge_containment_ratio = 0.5;  ///< extension to C5 (3): or this fraction of the smaller's points inside the larger's box
-  double merge_max_js = 0.3;        ///< nats, max Jensen-Shannon divergence of augmented mean scores
+  double merge_max_js = 0.3;        ///< nats, max Jensen-Shannon divergence of the label distributions
+  /// Evidence by default: a detector that gives one class and its score (YOLO) leaves a residual
+  /// of 0.5-0.7 that dominates the augmented vectors, so a cup (0.3) on a table (0.4) scored JS
+  /// 0.25 < 0.3 and redkitchen's table, chairs and mugs merged into one object.
+  MergeDistribution merge_distribution = MergeDistribution::evidence;
   double class_min_share = 0.5;     ///< the argmax class needs this share of the class evidence, else other (C3)
   bool absorb_fragments = true;     ///< extension: a deleted instance's points join a stable same-class instance it overlaps (C5 tests 3, 4)
   bool final_optimisation = true;   ///< finish() runs one more optimisation, ignoring recency
@@ -96,7 +120,9 @@ struct ObjectsConfig {
     v.param("mask_depth_gate_min", mask_depth_gate_min, "m/m", "minimum half-width of the mask depth gate, per m of median depth", non_negative());
     v.param("map_voxel_size", map_voxel_size, "m", "voxel size of instance point sets (C3)", {0.001, 1.0});
     v.param("association_distance", association_distance, "m", "d_assoc centroid gate (C4)", positive(100.0));
-    v.param("association_box_margin", association_box_margin, "m", "extension to C4: an instance whose box, grown by this, meets the segment's box is a candidate too (large objects seen in parts); 0 off", non_negative(1.0));
+    v.param("association_gate", association_gate, kAssociationGateNames, "C4 candidates: centroid (distance below association_distance, as printed) or extent (the instance's box, grown by association_box_margin, meets the segment's box)");
+    v.param("association_box_margin", association_box_margin, "m", "extent gate: margin added to the instance's box", non_negative(1.0));
+    v.param("association_class_share", association_class_share, "", "extension to C4: a segment merges only into an instance whose class evidence gives the segment's class at least this share; 0 class-agnostic as printed (a mug mask bleeding onto the table joined the table)", fraction());
     v.param("overlap_distance", overlap_distance, "m", "d_point of the overlap test (C4)", positive(1.0));
     v.param("overlap_ratio", overlap_ratio, "", "r, overlap fraction to merge a segment (C4)", fraction());
     v.param("reverse_containment", reverse_containment, "", "extension to C4: merge when the segment covers most of a same-class instance");
@@ -112,6 +138,7 @@ struct ObjectsConfig {
     v.param("merge_overlap_ratio", merge_overlap_ratio, "", "overlap needed for merging (C5 test 3): points of the smaller within d_point of the larger", fraction());
     v.param("merge_containment_ratio", merge_containment_ratio, "", "extension to C5 test 3: or this fraction of the smaller's points inside the larger's box (views of an object from opposite sides share no surface); 1 off", fraction());
     v.param("merge_max_js", merge_max_js, "nats", "max JS divergence for merging (C5)", {0.0, 0.6932});
+    v.param("merge_distribution", merge_distribution, kMergeDistributionNames, "label distributions of the C5 JS test (4): evidence (class shares of the summed scores) or augmented (mean scores + residual as other, as printed)");
     v.param("class_min_share", class_min_share, "", "an object takes the class with the most evidence only when it holds this share of the class evidence, else other (C3)", fraction());
     v.param("absorb_fragments", absorb_fragments, "", "extension to C5: points of a deleted instance overlapping a stable one of its class join it");
     v.param("final_optimisation", final_optimisation, "", "finish() optimises once more, ignoring recency");
