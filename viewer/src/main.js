@@ -241,7 +241,7 @@ function buildClassToggles(counts) {
     });
     const swatch = document.createElement('span');
     swatch.className = 'swatch';
-    swatch.style.background = cssColour(info.colour);
+    swatch.style.background = cssColour(cls === 0 ? [170, 170, 170] : info.colour);  // unlabelled: shaded grey, as drawn
     const name = document.createElement('span');
     name.className = 'class-name';
     name.textContent = info.name;
