@@ -2,7 +2,9 @@
 // depth noise), tracked poses and the built-in noisy segmenter (20 % flicker, missed and merged
 // masks), run end to end. The object map must hold up about as well as the TSDF labels do:
 // weighted overlap (METHODS C6) >= 0.75 and the object count within one of the ground truth.
-// Heavy: it renders and maps the whole demo (a few minutes on 2 cores).
+// Heavy: it renders and maps the whole demo (about 100 s on 2 cores).
+// Status (issue 17): the count holds (11 for 12) but WOv is 0.48: the objects' points are a
+// noisy shell under depth noise (ground-truth masks on the same data give 0.52), see README.
 #include <gtest/gtest.h>
 
 #include <cstdio>
