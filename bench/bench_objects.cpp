@@ -17,6 +17,7 @@
 #include <string>
 
 #include "semap/io/dataset.hpp"
+#include "semap/pipeline/outputs.hpp"
 #include "semap/pipeline/semap_config.hpp"
 #include "semap/segmentation/segmenter_factory.hpp"
 #include "objects/object_mapper.hpp"
@@ -110,7 +111,9 @@ int main(int argc, char** argv) {
     ObjectsConfig config;
     config.optimise_every = 10;  // keyframes, not frames
     if (!config_path.empty()) config = load_semap_config(config_path).objects;
-    if (const char* mode = std::getenv("SEMAP_OBJECTS_MODE")) config.segmentation_mode = mode;
+    if (const char* mode = std::getenv("SEMAP_OBJECTS_MODE"))
+      config.segmentation_mode = std::string_view(mode) == "backprojection" ? SegmentationMode::backprojection
+                                                                           : SegmentationMode::supervoxel;
     ObjectMapper mapper(config, reader->camera());
     double network_ms = 0;
     nlohmann::json summary_pre;
@@ -132,7 +135,7 @@ int main(int argc, char** argv) {
     }
     summary_pre["instances_before_finish"] = mapper.instances().size();
     mapper.finish();
-    mapper.write(out);
+    write_objects(mapper.summaries(), out);
     nlohmann::json summary = summary_pre;
     summary["keyframes"] = mapper.timings().frames;
     summary["network_ms_per_keyframe"] = network_ms / std::max<size_t>(1, mapper.timings().frames);
@@ -168,9 +171,10 @@ int main(int argc, char** argv) {
     keyframes.push_back(reader->load(i));
     segs.push_back(gt_segmentation(keyframes.back()));
   }
-  for (const std::string mode : {"supervoxel", "backprojection"}) {
+  for (const SegmentationMode mode_value : {SegmentationMode::supervoxel, SegmentationMode::backprojection}) {
+    const std::string mode(enum_name(kSegmentationModeNames, mode_value));
     ObjectsConfig config;
-    config.segmentation_mode = mode;
+    config.segmentation_mode = mode_value;
     ObjectMapper mapper(config, reader->camera());
     const std::clock_t cpu0 = std::clock();
     for (size_t k = 0; k < keyframes.size(); ++k) mapper.process(keyframes[k], segs[k], *keyframes[k].gt_T_world_camera);

@@ -86,6 +86,9 @@ struct MapperStats {
   size_t object_frames = 0;          ///< object-map keyframes processed (C2-C4)
   size_t object_accumulations_skipped = 0;
   size_t objects = 0;                ///< instances in the object map
+  size_t objects_created = 0;        ///< after finish(): instances created by association (C4) ...
+  size_t objects_deleted = 0;        ///< ... removed by the C5 deletion (too few associations) ...
+  size_t objects_merged = 0;         ///< ... and by the C5 merge (the rest folded at association)
   bool finished = false;
   bool map_refreshed = false;         ///< finish() rebuilt the TSDF with the optimised poses
   std::string map_refresh_note;       ///< why it did not, when it did not

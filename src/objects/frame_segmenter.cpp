@@ -98,7 +98,7 @@ void gate_mask_depth(std::vector<int>& mask_index, const cv::Mat& depth, int num
 
 std::vector<ObjectSegment> FrameSegmenter::segment(const Frame& frame, const SegmentationResult& seg,
                                                    const Pose& T_world_camera, FrameSegmentationStats* stats) const {
-  return run(frame, seg, T_world_camera, config_.segmentation_mode == "backprojection", stats);
+  return run(frame, seg, T_world_camera, config_.segmentation_mode == SegmentationMode::backprojection, stats);
 }
 
 std::vector<ObjectSegment> FrameSegmenter::backproject(const Frame& frame, const SegmentationResult& seg,

@@ -55,10 +55,20 @@ const PointKdTree& tree_of(const ObjectInstance& instance) {
 }
 }  // namespace
 
-ClassId ObjectInstance::class_id() const {
-  if (score_sum.empty()) return 0;
-  const auto it = std::max_element(score_sum.begin(), score_sum.end());
-  return *it > 0.0 ? static_cast<ClassId>(it - score_sum.begin()) : 0;
+std::vector<double> evidence_shares(const std::vector<double>& score_sum) {
+  std::vector<double> shares(score_sum.size(), 0.0);
+  double total = 0.0;
+  for (double v : score_sum) total += std::max(0.0, v);
+  if (!(total > 0.0)) return shares;
+  for (size_t k = 0; k < score_sum.size(); ++k) shares[k] = std::max(0.0, score_sum[k]) / total;
+  return shares;
+}
+
+ClassId evidence_class(const std::vector<double>& score_sum, double min_share) {
+  const std::vector<double> shares = evidence_shares(score_sum);
+  const auto it = std::max_element(shares.begin(), shares.end());
+  if (it == shares.end() || !(*it > 0.0)) return 0;
+  return *it >= min_share ? static_cast<ClassId>(it - shares.begin()) : id(Label::kOther);
 }
 
 std::vector<double> ObjectInstance::mean_scores() const { return augmented_mean_scores(score_sum, n); }
@@ -82,6 +92,7 @@ void ObjectMap::add_points(ObjectInstance& instance, const std::vector<Eigen::Ve
     instance.colours.push_back(i < colours.size() ? colours[i] : Rgb8{});
     instance.point_frames.push_back(frames.size() == points.size() ? frames[i] : (frames.empty() ? 0u : frames[0]));
     instance.point_sum += points[i].cast<double>();
+    instance.bounds.extend(points[i]);
     added = true;
   }
   if (added) instance.tree.reset();
@@ -112,13 +123,21 @@ void ObjectMap::downsample(const ObjectSegment& segment, std::vector<Eigen::Vect
 std::vector<std::pair<float, size_t>> ObjectMap::gate(const std::vector<Eigen::Vector3f>& points,
                                                       std::optional<ClassId> only_class) const {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  for (const auto& p : points) sum += p.cast<double>();
+  Eigen::AlignedBox3f box;
+  for (const auto& p : points) sum += p.cast<double>(), box.extend(p);
   const Eigen::Vector3f centroid = (sum / static_cast<double>(points.size())).cast<float>();
+  const float margin = static_cast<float>(config_.association_box_margin);
+  const bool extent = config_.association_gate == AssociationGate::extent;
   std::vector<std::pair<float, size_t>> candidates;
   for (size_t j = 0; j < instances_.size(); ++j) {
-    if (only_class && instances_[j].class_id() != *only_class) continue;
-    const float d = (instances_[j].centroid() - centroid).norm();
-    if (d < config_.association_distance) candidates.emplace_back(d, j);
+    const ObjectInstance& inst = instances_[j];
+    if (only_class && inst.class_id() != *only_class) continue;
+    const float d = (inst.centroid() - centroid).norm();
+    // Extension to C4 (extent gate): candidates are the instances the segment touches, whatever
+    // their size; a large object seen in parts has its centroid far from a part's.
+    const bool pass = extent ? !inst.bounds.isEmpty() && inst.bounds.exteriorDistance(box) <= margin
+                             : d < config_.association_distance;
+    if (pass) candidates.emplace_back(d, j);
   }
   std::sort(candidates.begin(), candidates.end());
   return candidates;
@@ -149,8 +168,11 @@ void ObjectMap::associate(const std::vector<ObjectSegment>& segments, size_t fra
     std::vector<Eigen::Vector3f> points;
     std::vector<Rgb8> colours;
     downsample(segment, points, colours);
-    // C4: candidates inside the centroid gate, nearest first.
-    const std::vector<std::pair<float, size_t>> candidates = gate(points, std::nullopt);
+    // C4: candidates inside the gate, nearest first; with association_class_share only those
+    // whose evidence admits the segment's class (a mug is no candidate of the table it is on,
+    // so the table's association count says how often the table was seen).
+    std::vector<std::pair<float, size_t>> candidates = gate(points, std::nullopt);
+    std::erase_if(candidates, [&](const auto& c) { return !accepts_class(instances_[c.second], segment.class_id); });
     for (size_t a = 0; a < candidates.size(); ++a) {
       auto& inst = instances_[candidates[a].second];
       ++inst.association_count;
@@ -171,16 +193,22 @@ void ObjectMap::associate(const std::vector<ObjectSegment>& segments, size_t fra
         if (segment_tree->nearest_sq(p) < limit_sq) ++hits;
       return hits > config_.reverse_containment_ratio * inst.points.size();
     };
+    // C4 target: the candidate the segment overlaps most, above r (the paper takes the nearest
+    // candidate above r; with the extent gate a large object's centroid may be the farthest).
     size_t target = instances_.size();
-    std::vector<size_t> covered;  // further same-class instances this segment covers: duplicates
+    double best_overlap = config_.overlap_ratio;
+    std::vector<char> covers(instances_.size(), 0);
     for (const auto& [d, j] : candidates) {
-      if (target == instances_.size()) {
-        if (overlap(points, instances_[j], config_.overlap_distance) > config_.overlap_ratio || segment_covers(instances_[j]))
-          target = j;
-      } else if (segment_covers(instances_[j])) {
-        covered.push_back(j);
-      }
+      covers[j] = segment_covers(instances_[j]);
+      const double o = overlap(points, instances_[j], config_.overlap_distance);
+      if (o > best_overlap) target = j, best_overlap = o;
     }
+    if (target == instances_.size())
+      for (const auto& [d, j] : candidates)
+        if (covers[j]) { target = j; break; }
+    std::vector<size_t> covered;  // further same-class instances this segment covers: duplicates
+    for (const auto& [d, j] : candidates)
+      if (j != target && covers[j]) covered.push_back(j);
     if (target == instances_.size()) {
       instances_.emplace_back();
       auto& created = instances_.back();
@@ -198,8 +226,7 @@ void ObjectMap::associate(const std::vector<ObjectSegment>& segments, size_t fra
     ObjectInstance& inst = instances_[target];
     add_points(inst, points, colours, {static_cast<uint32_t>(frame_index)});
     inst.n += 1;
-    for (size_t k = 0; k < inst.score_sum.size() && k < segment.class_scores.size(); ++k)
-      inst.score_sum[k] += segment.class_scores[k];
+    add_scores(inst, segment.class_scores);
     inst.last_frame = std::max(inst.last_frame, frame_index);
     inst.last_step = step;
     inst.changed = true;
@@ -225,6 +252,7 @@ void ObjectMap::apply_pose_corrections(const std::unordered_map<uint32_t, Eigen:
     inst.point_frames.clear();
     inst.voxel_to_point.clear();
     inst.point_sum.setZero();
+    inst.bounds.setEmpty();
     for (size_t i = 0; i < points.size(); ++i) {
       const auto it = corrections.find(frames[i]);
       if (it != corrections.end()) points[i] = it->second * points[i];
@@ -234,10 +262,31 @@ void ObjectMap::apply_pose_corrections(const std::unordered_map<uint32_t, Eigen:
   }
 }
 
+std::vector<double> ObjectMap::label_distribution(const ObjectInstance& instance) const {
+  return config_.merge_distribution == MergeDistribution::augmented ? instance.mean_scores()
+                                                                     : evidence_shares(instance.score_sum);
+}
+
+bool ObjectMap::accepts_class(const ObjectInstance& instance, ClassId cls) const {
+  if (config_.association_class_share <= 0.0) return true;
+  const double total = std::accumulate(instance.score_sum.begin(), instance.score_sum.end(), 0.0);
+  if (!(total > 0.0) || cls >= instance.score_sum.size()) return true;
+  return instance.score_sum[cls] >= config_.association_class_share * total;
+}
+
+double ObjectMap::label_divergence(const ObjectInstance& a, const ObjectInstance& b) const {
+  return js_divergence(label_distribution(a), label_distribution(b));
+}
+
+void ObjectMap::add_scores(ObjectInstance& instance, const std::vector<double>& scores) {
+  for (size_t k = 0; k < instance.score_sum.size() && k < scores.size(); ++k) instance.score_sum[k] += scores[k];
+  instance.decided_class = evidence_class(instance.score_sum, config_.class_min_share);
+}
+
 void ObjectMap::merge_into(ObjectInstance& target, ObjectInstance& source) {
   add_points(target, source.points, source.colours, source.point_frames);
   target.n += source.n;
-  for (size_t k = 0; k < target.score_sum.size(); ++k) target.score_sum[k] += source.score_sum[k];
+  add_scores(target, source.score_sum);
   target.association_count = std::max(target.association_count, source.association_count);
   target.total_associations += source.total_associations;
   target.first_frame = std::min(target.first_frame, source.first_frame);
@@ -249,11 +298,31 @@ void ObjectMap::merge_into(ObjectInstance& target, ObjectInstance& source) {
   target.changed = true;
 }
 
-OptimisationStats ObjectMap::optimise(size_t step, bool ignore_recency) {
-  OptimisationStats stats;
+void ObjectMap::absorb_fragment(size_t i, const std::vector<char>& remove, OptimisationStats& stats) {
+  // A rarely seen instance that lies on a STABLE one of the same class distribution is a partial
+  // view of it (its segment just missed the C4 overlap ratio), not a false detection: its
+  // surface joins that instance instead of being thrown away. Same overlap (3) and JS (4)
+  // tests as the C5 merge.
+  const ObjectInstance& inst = instances_[i];
+  size_t best = instances_.size();
+  double best_overlap = config_.merge_overlap_ratio;
+  for (size_t j = 0; j < instances_.size(); ++j) {
+    if (j == i || remove[j] || instances_[j].state != InstanceState::kStable) continue;
+    if ((instances_[j].centroid() - inst.centroid()).norm() >= config_.association_distance) continue;
+    const double o = overlap(inst.points, instances_[j], config_.overlap_distance);
+    if (o >= best_overlap && label_divergence(inst, instances_[j]) <= config_.merge_max_js)
+      best = j, best_overlap = o;
+  }
+  if (best == instances_.size()) return;
+  // Only the points: the fragment's counts are those of a rejected instance (C5 keeps the
+  // target's class evidence as it was).
+  add_points(instances_[best], inst.points, inst.colours, inst.point_frames);
+  ++stats.absorbed;
+}
+
+void ObjectMap::promote_or_delete(size_t step, bool ignore_recency, std::vector<char>& remove,
+                                  OptimisationStats& stats) {
   const double T = config_.optimise_every;
-  // NEW / UNSTABLE: promote, delete or keep (C5).
-  std::vector<char> remove(instances_.size(), 0);
   for (size_t i = 0; i < instances_.size(); ++i) {
     auto& inst = instances_[i];
     if (inst.state == InstanceState::kStable) continue;
@@ -264,69 +333,66 @@ OptimisationStats ObjectMap::optimise(size_t step, bool ignore_recency) {
     } else if (config_.enable_delete && inst.association_count + inst.n < config_.delete_fraction * T && !recent) {
       remove[i] = 1;
       ++stats.deleted;
-      // Extension (config absorb_fragments): a rarely seen instance that lies on a STABLE one of
-      // the same class distribution is a partial view of it (its segment just missed the C4
-      // overlap ratio), not a false detection: its surface joins that instance instead of
-      // being thrown away. Same overlap (3) and JS (4) tests as the C5 merge.
-      if (config_.absorb_fragments) {
-        size_t best = instances_.size();
-        double best_overlap = config_.merge_overlap_ratio;
-        for (size_t j = 0; j < instances_.size(); ++j) {
-          if (j == i || remove[j] || instances_[j].state != InstanceState::kStable) continue;
-          if ((instances_[j].centroid() - inst.centroid()).norm() >= config_.association_distance) continue;
-          const double o = overlap(inst.points, instances_[j], config_.overlap_distance);
-          if (o >= best_overlap && js_divergence(inst.mean_scores(), instances_[j].mean_scores()) <= config_.merge_max_js)
-            best = j, best_overlap = o;
-        }
-        if (best < instances_.size()) {
-          // Only the points: the fragment's counts are those of a rejected instance (C5 keeps
-          // the target's class evidence as it was).
-          add_points(instances_[best], inst.points, inst.colours, inst.point_frames);
-          ++stats.absorbed;
-        }
-      }
+      if (config_.absorb_fragments) absorb_fragment(i, remove, stats);
     } else {
       inst.state = InstanceState::kUnstable;
     }
   }
-  // STABLE pairs: (1) both stable, (2) co-association, then (3) overlap and (4) JS divergence.
-  if (config_.enable_merge) {
-    bool merged_any = true;
-    while (merged_any) {
-      merged_any = false;
-      for (size_t i = 0; i < instances_.size() && !merged_any; ++i) {
-        if (remove[i] || instances_[i].state != InstanceState::kStable) continue;
-        for (size_t j = i + 1; j < instances_.size(); ++j) {
-          auto& a = instances_[i];
-          auto& b = instances_[j];
-          if (remove[j] || b.state != InstanceState::kStable) continue;
-          if (!a.changed && !b.changed) continue;  // only re-check instances whose counts changed
-          const auto co_it = a.co_association.find(b.id);
-          const int co = co_it == a.co_association.end() ? 0 : co_it->second;
-          // (2): "exceeds a fraction of either one's association count" read as: of at least one.
-          const int s_min = std::min(a.association_count, b.association_count);
-          if (co <= 0 || co <= config_.merge_coassociation * s_min) continue;
-          ++stats.pairs_checked;
-          const bool a_smaller = a.points.size() <= b.points.size();
-          const ObjectInstance& small = a_smaller ? a : b;
-          const ObjectInstance& large = a_smaller ? b : a;
-          if (overlap(small.points, large, config_.overlap_distance) < config_.merge_overlap_ratio) continue;
-          if (js_divergence(a.mean_scores(), b.mean_scores()) > config_.merge_max_js) continue;
-          // Keep the instance with more merges (its id is the better established one).
-          if (a.n >= b.n) {
-            merge_into(a, b);
-            remove[j] = 1;
-          } else {
-            merge_into(b, a);
-            remove[i] = 1;
-          }
-          ++stats.merged;
-          merged_any = true;
-          break;
-        }
+}
+
+bool ObjectMap::geometric_overlap(const ObjectInstance& a, const ObjectInstance& b) const {
+  const bool a_smaller = a.points.size() <= b.points.size();
+  const ObjectInstance& small = a_smaller ? a : b;
+  const ObjectInstance& large = a_smaller ? b : a;
+  if (overlap(small.points, large, config_.overlap_distance) >= config_.merge_overlap_ratio) return true;
+  if (config_.merge_containment_ratio >= 1.0 || small.points.empty()) return false;
+  Eigen::AlignedBox3f box = large.bounds;
+  const Eigen::Vector3f grow = Eigen::Vector3f::Constant(static_cast<float>(config_.overlap_distance));
+  box.extend(box.min() - grow).extend(box.max() + grow);
+  size_t inside = 0;
+  for (const auto& p : small.points) inside += box.contains(p);
+  return inside >= config_.merge_containment_ratio * static_cast<double>(small.points.size());
+}
+
+void ObjectMap::merge_stable_pairs(std::vector<char>& remove, OptimisationStats& stats) {
+  bool merged_any = true;
+  while (merged_any) {
+    merged_any = false;
+    for (size_t i = 0; i < instances_.size() && !merged_any; ++i) {
+      if (remove[i] || instances_[i].state != InstanceState::kStable) continue;
+      for (size_t j = i + 1; j < instances_.size(); ++j) {
+        auto& a = instances_[i];
+        auto& b = instances_[j];
+        if (remove[j] || b.state != InstanceState::kStable) continue;  // (1)
+        if (!a.changed && !b.changed) continue;  // only re-check instances whose counts changed
+        const auto co_it = a.co_association.find(b.id);
+        const int co = co_it == a.co_association.end() ? 0 : co_it->second;
+        // (2): "exceeds a fraction of either one's association count" read as: of at least one.
+        const int s_min = std::min(a.association_count, b.association_count);
+        if (co <= 0 || co <= config_.merge_coassociation * s_min) continue;
+        ++stats.pairs_checked;
+        if (!geometric_overlap(a, b)) continue;                                               // (3)
+        if (label_divergence(a, b) > config_.merge_max_js) continue;  // (4)
+        // Keep the instance with more merges (its id is the better established one).
+        const bool keep_a = a.n >= b.n;
+        merge_into(keep_a ? a : b, keep_a ? b : a);
+        remove[keep_a ? j : i] = 1;
+        ++stats.merged;
+        merged_any = true;
+        break;
       }
     }
   }
+}
+
+OptimisationStats ObjectMap::optimise(size_t step, bool ignore_recency) {
+  OptimisationStats stats;
+  stats.before = instances_.size();
+  std::vector<char> remove(instances_.size(), 0);
+  promote_or_delete(step, ignore_recency, remove, stats);  // NEW / UNSTABLE (C5)
+  stats.after_delete = stats.before - static_cast<size_t>(stats.deleted);
+  if (config_.enable_merge) merge_stable_pairs(remove, stats);  // STABLE pairs (C5)
+  stats.after_merge = stats.after_delete - static_cast<size_t>(stats.merged);
   std::vector<ObjectInstance> kept;
   kept.reserve(instances_.size());
   for (size_t i = 0; i < instances_.size(); ++i)

@@ -30,6 +30,8 @@ struct ObjectInstance {
   std::vector<Rgb8> colours;
   std::vector<uint32_t> point_frames;  ///< per point: the frame it was observed in (pose corrections)
   Eigen::Vector3d point_sum = Eigen::Vector3d::Zero();
+  Eigen::AlignedBox3f bounds;         ///< axis-aligned box of the points (empty when none)
+  ClassId decided_class = 0;          ///< evidence_class(score_sum), updated with the scores
   int association_count = 0;          ///< s_i since the last optimisation
   int total_associations = 0;         ///< s_i over the whole run (reporting)
   std::unordered_map<uint32_t, int> co_association;  ///< co-candidacy with other ids since the last optimisation
@@ -44,13 +46,22 @@ struct ObjectInstance {
     if (points.empty()) return Eigen::Vector3f::Zero();
     return (point_sum / static_cast<double>(points.size())).cast<float>();
   }
-  /// argmax of the accumulated scores (class 0 only when no scores).
-  ClassId class_id() const;
+  /// The class decided by the evidence over frames (evidence_class); 0 only without scores.
+  ClassId class_id() const { return decided_class; }
   /// Augmented mean score vector (C5).
   std::vector<double> mean_scores() const;
 };
 
+/// The class an instance's accumulated scores support (C3): the argmax class when it holds at
+/// least `min_share` of the class evidence (the scores summed over its segments, detector
+/// uncertainty left out), else `other`: an object the detector called a table in a third of
+/// its views and something else in the rest is not a table. 0 when there is no evidence.
+ClassId evidence_class(const std::vector<double>& score_sum, double min_share);
+/// Share of each class in the evidence (sums to 1; all 0 without evidence).
+std::vector<double> evidence_shares(const std::vector<double>& score_sum);
+
 struct OptimisationStats {
+  size_t before = 0, after_delete = 0, after_merge = 0;  ///< instances in the map around each C5 step
   int promoted = 0, deleted = 0, merged = 0, pairs_checked = 0;
   int absorbed = 0;  ///< deleted instances whose points joined a stable one (absorb_fragments)
 };
@@ -75,6 +86,8 @@ class ObjectMap {
   OptimisationStats optimise(size_t step, bool ignore_recency);
 
   const std::vector<ObjectInstance>& instances() const { return instances_; }
+  /// Instances created so far (C4 "no target"), before any C5 deletion or merge.
+  size_t created() const { return next_id_ - 1; }
   /// Fraction of `query` points with an instance point closer than `distance` (C4 overlap).
   double overlap(const std::vector<Eigen::Vector3f>& query, const ObjectInstance& instance, double distance) const;
   /// Per point: id of the instance with the nearest point within max_dist, else 0.
@@ -88,9 +101,26 @@ class ObjectMap {
   void add_points(ObjectInstance& instance, const std::vector<Eigen::Vector3f>& points, const std::vector<Rgb8>& colours,
                   const std::vector<uint32_t>& frames);
   void merge_into(ObjectInstance& target, ObjectInstance& source);
-  /// C4 centroid gate: (distance, index) of the instances whose centroid is within
-  /// association_distance of the centroid of `points`, nearest first; only_class keeps
-  /// instances of that class.
+  /// Extension to C4 (association_class_share): the instance's evidence gives `cls` enough share
+  /// for a segment of that class to merge into it.
+  bool accepts_class(const ObjectInstance& instance, ClassId cls) const;
+  /// The distribution C5 test (4) compares (config merge_distribution).
+  std::vector<double> label_distribution(const ObjectInstance& instance) const;
+  double label_divergence(const ObjectInstance& a, const ObjectInstance& b) const;
+  /// Adds a segment's class scores to the instance's evidence and re-decides its class.
+  void add_scores(ObjectInstance& instance, const std::vector<double>& scores);
+  /// C5 test (3): the smaller instance's points lie on the larger's surface (C4 overlap) or,
+  /// extension, inside its box (two views of an object from opposite sides share no surface).
+  bool geometric_overlap(const ObjectInstance& a, const ObjectInstance& b) const;
+  /// C5 promote / delete pass over NEW and UNSTABLE instances; marks deletions in `remove`.
+  void promote_or_delete(size_t step, bool ignore_recency, std::vector<char>& remove, OptimisationStats& stats);
+  /// Extension (absorb_fragments): the deleted instance i's points join a stable one it overlaps.
+  void absorb_fragment(size_t i, const std::vector<char>& remove, OptimisationStats& stats);
+  /// C5 merge of stable pairs (tests 1-4), until no pair merges.
+  void merge_stable_pairs(std::vector<char>& remove, OptimisationStats& stats);
+  /// C4 gate (config association_gate): (centroid distance, index) of the instances whose
+  /// centroid is within association_distance of the centroid of `points`, or whose box grown by
+  /// association_box_margin meets the points' box; nearest first; only_class keeps that class.
   std::vector<std::pair<float, size_t>> gate(const std::vector<Eigen::Vector3f>& points,
                                              std::optional<ClassId> only_class) const;
 

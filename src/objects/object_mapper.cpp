@@ -6,9 +6,8 @@
 #include <algorithm>
 #include <unordered_map>
 
-#include "semap/core/error.hpp"
-#include "core/paths.hpp"
-#include "semap/io/ply_io.hpp"
+#include <spdlog/spdlog.h>
+
 
 namespace semap {
 
@@ -51,6 +50,22 @@ void ObjectMapper::finish() {
     optimisation_log_.push_back(map_.optimise(step_, true));
     ++timings_.optimisations;
   }
+  const ObjectMapCounts c = counts();
+  spdlog::info("object map (C4, C5): {} instances created, {} folded at association, {} deleted ({} absorbed), "
+               "{} merged -> {} objects", c.created, c.covered, c.deleted, c.absorbed, c.merged, c.final);
+}
+
+ObjectMapCounts ObjectMapper::counts() const {
+  ObjectMapCounts c;
+  c.created = map_.created();
+  for (const OptimisationStats& s : optimisation_log_) {
+    c.deleted += static_cast<size_t>(s.deleted);
+    c.absorbed += static_cast<size_t>(s.absorbed);
+    c.merged += static_cast<size_t>(s.merged);
+  }
+  c.final = map_.instances().size();
+  c.covered = c.created - c.deleted - c.merged - c.final;
+  return c;
 }
 
 namespace {
@@ -141,10 +156,12 @@ std::vector<ObjectSummary> ObjectMapper::summaries() const {
     ObjectSummary o;
     o.id = inst.id;
     o.class_id = inst.class_id();
-    const auto mean = inst.mean_scores();  // [0] = "other" residual (C5)
-    for (size_t k = 1; k < mean.size(); ++k)
-      if (mean[k] >= 0.005) o.class_distribution[std::string(class_name(static_cast<ClassId>(k - 1)))] = mean[k];
-    if (mean[0] >= 0.005) o.class_distribution[std::string(class_name(id(Label::kOther)))] += mean[0];
+    // Share of each class in the evidence over frames (C3); the detector's own uncertainty (the
+    // "other" residual of C5's augmented vector) is the confidence, not a class.
+    const std::vector<double> shares = evidence_shares(inst.score_sum);
+    for (size_t k = 0; k < shares.size(); ++k)
+      if (shares[k] >= 0.005) o.class_distribution[std::string(class_name(static_cast<ClassId>(k)))] = shares[k];
+    o.confidence = 1.0 - inst.mean_scores()[0];
     // Boxes describe the object's body: its largest cluster, trimmed of stray points.
     const std::vector<Eigen::Vector3f> body = largest_cluster(inst.points, config_.box_cluster_distance);
     std::vector<double> coordinate(body.size());
@@ -169,20 +186,5 @@ std::vector<ObjectSummary> ObjectMapper::summaries() const {
 }
 
 nlohmann::json ObjectMapper::to_json() const { return objects_json(summaries()); }
-
-void ObjectMapper::write(const std::filesystem::path& out_dir) const {
-  std::error_code ec;
-  std::filesystem::create_directories(out_dir / "objects", ec);
-  if (ec) throw Error(out_dir, "cannot create output folder: " + ec.message());
-  for (const auto& inst : map_.instances()) {
-    if (inst.points.empty()) continue;
-    PointCloud cloud;
-    cloud.points = inst.points;
-    cloud.colours = inst.colours;
-    const auto path = out_dir / "objects" / (std::to_string(inst.id) + ".ply");
-    write_atomic_with(path, [&](const std::filesystem::path& tmp) { write_ply(tmp, cloud); });
-  }
-  write_file_atomic(out_dir / "objects.json", to_json().dump(2) + "\n");
-}
 
 }  // namespace semap

@@ -27,6 +27,16 @@ struct ObjectMapperTimings {
   size_t optimisations = 0;
 };
 
+/// What C5 did over the run: instances created by association (C4), then removed by each step.
+struct ObjectMapCounts {
+  size_t created = 0;   ///< instances created (C4)
+  size_t deleted = 0;   ///< C5 deletions (too few associations)
+  size_t absorbed = 0;  ///< of those, whose points joined a stable instance (absorb_fragments)
+  size_t merged = 0;    ///< C5 merges of stable pairs
+  size_t covered = 0;   ///< folded into a segment that covered them at association (reverse_containment)
+  size_t final = 0;     ///< instances at the end
+};
+
 class ObjectMapper {
  public:
   ObjectMapper(const ObjectsConfig& config, const CameraModel& camera);
@@ -43,8 +53,6 @@ class ObjectMapper {
   }
   /// Final C5 pass (config final_optimisation). Call once after the last frame.
   void finish();
-  /// objects.json + objects/<id>.ply (schema in SHARED_FORMATS.md), written atomically.
-  void write(const std::filesystem::path& out_dir) const;
   /// The objects.json document.
   nlohmann::json to_json() const;
   /// Every non-empty instance, with its box and class distribution.
@@ -58,6 +66,8 @@ class ObjectMapper {
   }
   const ObjectMapperTimings& timings() const { return timings_; }
   const std::vector<OptimisationStats>& optimisation_log() const { return optimisation_log_; }
+  /// Created / deleted / merged over the run (from the optimisation log).
+  ObjectMapCounts counts() const;
 
  private:
   ObjectsConfig config_;

@@ -11,6 +11,7 @@ nlohmann::json to_json(const ObjectSummary& o) {
           {"class", std::string(class_name(o.class_id))},
           {"class_id", o.class_id},
           {"class_distribution", o.class_distribution},
+          {"confidence", o.confidence},
           {"n", o.merge_count},
           {"association_count", o.associations},
           {"centroid", vec(o.centroid)},

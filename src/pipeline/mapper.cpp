@@ -505,6 +505,10 @@ void Mapper::finish() {
     std::lock_guard lock(m.objects_mutex);
     m.objects.finish();
     m.objects_in_map = m.objects.instances().size();
+    const ObjectMapCounts counts = m.objects.counts();
+    m.final_stats.objects_created = counts.created;
+    m.final_stats.objects_deleted = counts.deleted;
+    m.final_stats.objects_merged = counts.merged;
     m.timings.add("object_map_final", ms_since(t0));
   }
   m.finished = true;

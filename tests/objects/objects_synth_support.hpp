@@ -18,6 +18,7 @@
 #include "semap/io/dataset.hpp"
 #include "semap/io/ply_io.hpp"
 #include "objects/object_mapper.hpp"
+#include "semap/pipeline/outputs.hpp"
 #include "semap/synth/segmentation_noise.hpp"
 #include "synth/synth_config.hpp"
 
@@ -105,7 +106,7 @@ inline MapRunResult run_object_mapper(const std::filesystem::path& dataset, cons
     else mapper.accumulate(frame, seg, *frame.gt_T_world_camera);
   }
   mapper.finish();
-  if (!write_to.empty()) mapper.write(write_to);
+  if (!write_to.empty()) write_objects(mapper.summaries(), write_to);
   return {mapper.to_json(), mapper.instances(), mapper.timings()};
 }
 

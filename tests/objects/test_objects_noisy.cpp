@@ -90,7 +90,7 @@ TEST(ObjectsNoisy, OptimisationAndSupervoxelsImproveNoisyMaps) {
   const int frame_step = 2;
 
   ObjectsConfig backprojection = base;
-  backprojection.segmentation_mode = "backprojection";
+  backprojection.segmentation_mode = SegmentationMode::backprojection;
   const auto supervoxel_frames = segment_sequence(dir.path() / "data", base, noise, frame_step);
   const auto backprojection_frames = segment_sequence(dir.path() / "data", backprojection, noise, frame_step);
 

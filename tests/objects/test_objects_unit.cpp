@@ -153,7 +153,9 @@ ObjectsConfig toy_config() {
 }  // namespace
 
 TEST(ObjectsMap, AssociationMergesOrCreates) {
-  ObjectMap map(toy_config());
+  ObjectsConfig c = toy_config();
+  c.association_gate = AssociationGate::centroid;  // C4 as printed
+  ObjectMap map(c);
   const ClassId cup = id(Label::kCup);
   map.associate({cube_segment({0, 0, 0}, 0.1f, cup)}, 0, 1);
   ASSERT_EQ(map.instances().size(), 1u);
@@ -389,8 +391,8 @@ float max_camera_depth(const std::vector<ObjectSegment>& segments) {
 }  // namespace
 
 TEST(ObjectsSegmenter, MaskDepthGateDropsSurfaceBehindTheObject) {
-  for (const std::string mode : {"backprojection", "supervoxel"}) {
-    SCOPED_TRACE(mode);
+  for (const SegmentationMode mode : {SegmentationMode::backprojection, SegmentationMode::supervoxel}) {
+    SCOPED_TRACE(std::string(enum_name(kSegmentationModeNames, mode)));
     ObjectsConfig c;
     c.segmentation_mode = mode;
     c.pixel_stride = 1;
@@ -404,11 +406,11 @@ TEST(ObjectsSegmenter, MaskDepthGateDropsSurfaceBehindTheObject) {
     c.mask_depth_gate_k = 0.0;  // off: the wall strip joins the object
     const auto plain = FrameSegmenter(c, s.camera).segment(s.frame, s.seg, Pose::Identity());
     ASSERT_EQ(plain.size(), 1u);
-    if (mode == "backprojection") EXPECT_GT(max_camera_depth(plain), 2.9f);
+    if (mode == SegmentationMode::backprojection) EXPECT_GT(max_camera_depth(plain), 2.9f);
   }
   // A surface spanning 1-2 m in depth inside its own mask is kept whole (MAD scales the gate).
   ObjectsConfig c;
-  c.segmentation_mode = "backprojection";
+  c.segmentation_mode = SegmentationMode::backprojection;
   c.pixel_stride = 1;
   c.mask_depth_gate_k = 3.0;
   GateScene s = gate_scene(true);
@@ -416,4 +418,127 @@ TEST(ObjectsSegmenter, MaskDepthGateDropsSurfaceBehindTheObject) {
   ASSERT_EQ(tilted.size(), 1u);
   EXPECT_EQ(tilted[0].points.size(), 30u * 28u);
   EXPECT_NEAR(max_camera_depth(tilted), 2.0f, 1e-3f);
+}
+
+// C3 class by evidence: the argmax class needs class_min_share of the summed scores, else the
+// object is `other`; the detector's uncertainty (low scores) is no evidence for another class.
+TEST(ObjectsMap, ClassIsDecidedByEvidenceWithOtherWhenUndecided) {
+  std::vector<double> scores(kNumClasses, 0.0);
+  EXPECT_EQ(evidence_class(scores, 0.5), 0);  // no evidence
+  scores[id(Label::kTable)] = 0.9;             // three weak table views (0.3 each)
+  EXPECT_EQ(evidence_class(scores, 0.5), id(Label::kTable));
+  scores[id(Label::kOther)] = 1.2;  // and four views of a class outside the set
+  EXPECT_EQ(evidence_class(scores, 0.5), id(Label::kOther));
+  scores[id(Label::kOther)] = 0.0;
+  scores[id(Label::kDesk)] = 0.8;  // table 0.53 / desk 0.47: undecided at 0.6
+  EXPECT_EQ(evidence_class(scores, 0.5), id(Label::kTable));
+  EXPECT_EQ(evidence_class(scores, 0.6), id(Label::kOther));
+  const auto shares = evidence_shares(scores);
+  EXPECT_NEAR(shares[id(Label::kTable)] + shares[id(Label::kDesk)], 1.0, 1e-12);
+
+  // The instance's class follows its evidence as segments arrive (any class may merge here).
+  ObjectsConfig c = toy_config();
+  c.association_class_share = 0.0;
+  ObjectMap map(c);
+  const ClassId table = id(Label::kTable), other = id(Label::kOther);
+  map.associate({cube_segment({0, 0, 0}, 0.2f, table)}, 0, 1);
+  EXPECT_EQ(map.instances()[0].class_id(), table);
+  for (int i = 0; i < 2; ++i) map.associate({cube_segment({0, 0, 0}, 0.2f, other)}, 1 + i, 2 + i);
+  ASSERT_EQ(map.instances().size(), 1u);
+  EXPECT_EQ(map.instances()[0].class_id(), other);
+}
+
+// C4 with the instance's extent: a 1.6 m table first seen at one end, then at the other end. The
+// second view's centroid is more than association_distance from the instance's, but it overlaps
+// the instance's surface: it must join it, not start a second table.
+TEST(ObjectsMap, AssociationUsesTheInstanceExtent) {
+  auto slab = [](float x0, float x1) {
+    ObjectSegment s;
+    for (float x = x0; x < x1; x += 0.01f)
+      for (float y = 0; y < 0.8f; y += 0.01f) s.points.emplace_back(x, y, 0.75f);
+    s.colours.assign(s.points.size(), Rgb8{});
+    s.class_id = id(Label::kTable);
+    s.score = 1.f;
+    s.class_scores.assign(kNumClasses, 0.0);
+    s.class_scores[s.class_id] = 1.0;
+    return s;
+  };
+  for (const AssociationGate gate : {AssociationGate::extent, AssociationGate::centroid}) {
+    ObjectsConfig c = toy_config();
+    c.association_distance = 0.5;
+    c.association_gate = gate;
+    ObjectMap map(c);
+    map.associate({slab(0.0f, 1.2f)}, 0, 1);   // centroid x 0.6
+    map.associate({slab(0.75f, 1.6f)}, 1, 2);  // centroid x 1.18 (0.58 m off); 56 % on the first
+    SCOPED_TRACE(std::string(enum_name(kAssociationGateNames, gate)));
+    EXPECT_EQ(map.instances().size(), gate == AssociationGate::extent ? 1u : 2u);  // centroid gate: a duplicate
+  }
+  // The extent gate counts the instances a segment touches, not every one within 1 m: a cup
+  // 0.3 m from another is not its candidate, so its association count says how often it was seen.
+  ObjectMap map(toy_config());
+  const ClassId cup = id(Label::kCup);
+  map.associate({cube_segment({0, 0, 0}, 0.1f, cup)}, 0, 1);
+  map.associate({cube_segment({0.3f, 0, 0}, 0.1f, cup)}, 1, 2);
+  map.associate({cube_segment({0.3f, 0, 0}, 0.1f, cup)}, 2, 3);
+  ASSERT_EQ(map.instances().size(), 2u);
+  EXPECT_EQ(map.instances()[0].association_count, 1);
+  EXPECT_EQ(map.instances()[1].association_count, 2);
+  EXPECT_TRUE(map.instances()[0].co_association.empty());
+}
+
+// Extension to C4 (association_class_share): a mug whose mask bleeds onto the table overlaps the
+// table's surface more than r, but the table's evidence has no cup in it: a new instance.
+TEST(ObjectsMap, SegmentMergesOnlyIntoAnInstanceWithEvidenceForItsClass) {
+  for (const double share : {0.2, 0.0}) {
+    ObjectsConfig c = toy_config();
+    c.association_class_share = share;
+    c.reverse_containment = false;
+    ObjectMap map(c);
+    map.associate({cube_segment({0, 0, 0}, 0.3f, id(Label::kTable))}, 0, 1);
+    map.associate({cube_segment({0.02f, 0.02f, 0.02f}, 0.26f, id(Label::kCup))}, 1, 2);
+    SCOPED_TRACE(share);
+    EXPECT_EQ(map.instances().size(), share > 0 ? 2u : 1u);
+  }
+}
+
+// C5 test (3) with the extent: two stable duplicates of one chair, one built from its front, one
+// from its back (no shared surface). The smaller lies inside the larger's box: merged. The same
+// back face 0.5 m away is another object.
+TEST(ObjectsMap, MergeOfViewsFromOppositeSidesByContainment) {
+  auto face = [](float x, float z0, float z1, ClassId cls) {
+    ObjectSegment s;
+    for (float y = 0; y < 0.4f; y += 0.01f)
+      for (float z = z0; z < z1; z += 0.01f) s.points.emplace_back(x, y, z);
+    for (float xx = 0; xx < 0.4f; xx += 0.01f)
+      for (float y = 0; y < 0.4f; y += 0.01f) s.points.emplace_back(xx, y, 0.45f);  // seat
+    s.colours.assign(s.points.size(), Rgb8{});
+    s.class_id = cls;
+    s.score = 1.f;
+    s.class_scores.assign(kNumClasses, 0.0);
+    s.class_scores[cls] = 1.0;
+    return s;
+  };
+  const ClassId chair = id(Label::kChair);
+  for (const double ratio : {0.5, 1.0}) {
+    ObjectsConfig c = toy_config();
+    c.overlap_ratio = 0.95;  // the two views do not associate (C4)
+    c.reverse_containment = false;
+    c.merge_overlap_ratio = 0.9;  // nor pass the surface-overlap test
+    c.merge_containment_ratio = ratio;
+    ObjectMap map(c);
+    for (int i = 0; i < 6; ++i) {
+      ObjectSegment front = face(0.0f, 0.0f, 0.9f, chair);  // back rest and seat seen from the front
+      ObjectSegment back = face(0.39f, 0.0f, 0.45f, chair);  // legs side seen from behind, inside
+      for (auto& p : back.points) p.z() -= 0.02f;             // the seat 2 cm lower: no shared surface
+      map.associate({front}, i, i + 1);
+      map.associate({back}, i, i + 1);
+    }
+    ASSERT_EQ(map.instances().size(), 2u);
+    const auto stats = map.optimise(50, false);
+    EXPECT_EQ(stats.before, 2u);
+    EXPECT_EQ(stats.after_delete, 2u);
+    SCOPED_TRACE(ratio);
+    EXPECT_EQ(stats.merged, ratio < 1.0 ? 1 : 0);
+    EXPECT_EQ(stats.after_merge, ratio < 1.0 ? 1u : 2u);
+  }
 }

@@ -190,7 +190,9 @@ TEST(MapIo, SaveLoadIsExactAndCorruptionIsAnError) {
 }
 
 TEST(MeshPly, WrittenMeshCarriesColoursAndLabels) {
-  SemanticTsdf tsdf = fuse(config_for("projective"), 3);  // 3 frames: labels need three frames' evidence
+  TsdfConfig c = config_for("projective");
+  c.mesh_colour = "class";  // the default is the surface colour; the palette is checked here
+  SemanticTsdf tsdf = fuse(c, 3);  // 3 frames: labels need three frames' evidence
   test::TempDir dir("tsdf_ply");
   tsdf.write_mesh(dir / "mesh.ply");
   const TriangleMesh back = read_ply(dir / "mesh.ply");

@@ -122,15 +122,17 @@ function buildMesh(ply) {
     const c = v / 255;
     toLinear[v] = c < 0.04045 ? c * 0.0773993808 : Math.pow(c * 0.9478672986 + 0.0521327014, 2.4);
   }
-  // Unlabelled vertices (palette black) show their RGB as grey levels, else mid grey.
-  // An all-black RGB channel carries no colour (e.g. colour integration off): ignore it.
+  // Unlabelled vertices (palette black) show their RGB as light grey levels (shaded, never
+  // black), else mid grey. An all-black RGB channel carries no colour (e.g. colour integration
+  // off): ignore it. In RGB mode, a vertex whose voxel never saw colour is mid grey too.
   const hasRgb = Boolean(props.red && props.green && props.blue) &&
     (props.red.some((v) => v > 0) || props.green.some((v) => v > 0) || props.blue.some((v) => v > 0));
+  const luma = (i) => 0.3 * props.red[i] + 0.59 * props.green[i] + 0.11 * props.blue[i];
   const classColours = new Float32Array(n * 3);
   for (let i = 0; i < n; ++i) {
     let c = classInfo(labels[i]).colour;
     if (labels[i] === 0) {
-      const grey = hasRgb ? Math.round(0.3 * props.red[i] + 0.59 * props.green[i] + 0.11 * props.blue[i]) : 128;
+      const grey = hasRgb ? Math.round(110 + 0.45 * luma(i)) : 150;
       c = [grey, grey, grey];
     }
     classColours[3 * i] = toLinear[c[0]];
@@ -141,9 +143,10 @@ function buildMesh(ply) {
   if (hasRgb) {
     rgbColours = new Float32Array(n * 3);
     for (let i = 0; i < n; ++i) {
-      rgbColours[3 * i] = toLinear[props.red[i]];
-      rgbColours[3 * i + 1] = toLinear[props.green[i]];
-      rgbColours[3 * i + 2] = toLinear[props.blue[i]];
+      const unseen = props.red[i] === 0 && props.green[i] === 0 && props.blue[i] === 0;
+      rgbColours[3 * i] = toLinear[unseen ? 150 : props.red[i]];
+      rgbColours[3 * i + 1] = toLinear[unseen ? 150 : props.green[i]];
+      rgbColours[3 * i + 2] = toLinear[unseen ? 150 : props.blue[i]];
     }
   }
   const classAttribute = new THREE.BufferAttribute(classColours, 3);
@@ -239,7 +242,7 @@ function buildClassToggles(counts) {
     });
     const swatch = document.createElement('span');
     swatch.className = 'swatch';
-    swatch.style.background = cssColour(info.colour);
+    swatch.style.background = cssColour(cls === 0 ? [170, 170, 170] : info.colour);  // unlabelled: shaded grey, as drawn
     const name = document.createElement('span');
     name.className = 'class-name';
     name.textContent = info.name;
@@ -414,29 +417,62 @@ function buildTrajectory(poses) {
 
 // ------------------------------------------------------------------ camera fit
 
-// Up direction: the mean normal of floor triangles when the mesh has a floor; else the camera's
-// "up" (-y in the optical frame) at the first pose; else +z.
-function estimateUp(floorId, poses) {
-  const geometry = state.meshGeometry;
-  const floor = floorId >= 0 ? state.trianglesByClass.get(floorId) : null;
-  if (geometry && floor && floor.length >= 3 && !state.isPointCloud) {
-    const pos = geometry.getAttribute('position');
-    const a = new THREE.Vector3(), b = new THREE.Vector3(), c = new THREE.Vector3();
-    const sum = new THREE.Vector3();
-    for (let t = 0; t + 2 < floor.length; t += 3) {
-      a.fromBufferAttribute(pos, floor[t]);
-      b.fromBufferAttribute(pos, floor[t + 1]);
-      c.fromBufferAttribute(pos, floor[t + 2]);
-      const normal = new THREE.Vector3().subVectors(c, b).cross(new THREE.Vector3().subVectors(a, b));
-      // Orient every face normal toward the mesh centre before summing (winding may vary).
-      const centre = geometry.boundingBox.getCenter(new THREE.Vector3());
-      if (normal.dot(centre.sub(a)) < 0) normal.negate();
-      sum.add(normal);
+// Up direction (gravity), whatever the world convention (TUM, 7-Scenes: the first camera or the
+// motion-capture frame; ScanNet: z up): a hand-held or robot camera is held upright on average,
+// so the mean of the cameras' "up" (-y in the optical frame) over the trajectory points against
+// gravity. The floor plane refines it: the area-weighted mean normal of the floor triangles
+// (class floor) or else of the horizontal triangles (within 25 deg of the trajectory's up:
+// floor, table tops), each turned to agree with the trajectory. Without a trajectory: the floor
+// triangles oriented toward the mesh centre, else +z.
+function trajectoryUp(poses) {
+  const sum = new THREE.Vector3();
+  for (const pose of poses) sum.add(new THREE.Vector3(0, -1, 0).applyQuaternion(pose.q));
+  return sum.lengthSq() > 1e-12 ? sum.normalize() : null;
+}
+
+function meanNormal(triangles, reference, minCos) {
+  const pos = state.meshGeometry.getAttribute('position');
+  const a = new THREE.Vector3(), b = new THREE.Vector3(), c = new THREE.Vector3();
+  const normal = new THREE.Vector3(), sum = new THREE.Vector3();
+  const centre = state.meshGeometry.boundingBox.getCenter(new THREE.Vector3());
+  for (let t = 0; t + 2 < triangles.length; t += 3) {
+    a.fromBufferAttribute(pos, triangles[t]);
+    b.fromBufferAttribute(pos, triangles[t + 1]);
+    c.fromBufferAttribute(pos, triangles[t + 2]);
+    normal.subVectors(c, b).cross(new THREE.Vector3().subVectors(a, b));  // length = 2 * area
+    const length = normal.length();
+    if (length <= 0) continue;
+    if (reference) {
+      const cos = normal.dot(reference) / length;
+      if (Math.abs(cos) < minCos) continue;
+      if (cos < 0) normal.negate();
+    } else if (normal.dot(new THREE.Vector3().subVectors(centre, a)) < 0) {
+      normal.negate();  // winding may vary: orient toward the mesh centre
     }
-    if (sum.lengthSq() > 0) return sum.normalize();
+    sum.add(normal);
   }
-  if (poses && poses.length > 0) return new THREE.Vector3(0, -1, 0).applyQuaternion(poses[0].q).normalize();
-  return new THREE.Vector3(0, 0, 1);
+  return sum.lengthSq() > 0 ? sum.normalize() : null;
+}
+
+function estimateUp(floorId, poses) {
+  const fromTrajectory = poses && poses.length > 0 ? trajectoryUp(poses) : null;
+  const geometry = state.meshGeometry;
+  if (geometry && !state.isPointCloud && geometry.index) {
+    const floor = floorId >= 0 ? state.trianglesByClass.get(floorId) : null;
+    if (floor && floor.length >= 3) {
+      const up = meanNormal(floor, fromTrajectory, 0);
+      if (up) return up;
+    }
+    if (fromTrajectory) {
+      const all = [...state.trianglesByClass.values()];  // every class, the ceiling too
+      const merged = new Uint32Array(all.reduce((n, l) => n + l.length, 0));
+      let at = 0;
+      for (const list of all) { merged.set(list, at); at += list.length; }
+      const up = meanNormal(merged, fromTrajectory, Math.cos(THREE.MathUtils.degToRad(25)));
+      if (up) return up;
+    }
+  }
+  return fromTrajectory || new THREE.Vector3(0, 0, 1);
 }
 
 function fitCamera(box, up) {
@@ -480,11 +516,14 @@ async function loadMap(files, quiet = false) {
         const counts = buildMesh(ply);
         buildClassToggles(counts);
         updateVisibleClasses();
-        // A map without any labels (segmenter "none") reads better in its fused colours.
-        if (state.rgbAttribute && [...counts.keys()].every((cls) => cls === 0)) {
-          document.getElementById('colour-mode').value = 'rgb';
+        // The surface colour by default (class colours one toggle away); the palette when the
+        // mesh carries no colour. Chosen once: a live refresh keeps the user's choice.
+        const select = document.getElementById('colour-mode');
+        if (!state.colourModeChosen) {
+          select.value = state.rgbAttribute ? 'rgb' : 'class';
+          state.colourModeChosen = true;
         }
-        setColourMode(document.getElementById('colour-mode').value);
+        setColourMode(select.value);
         bounds.union(state.meshGeometry.boundingBox);
       }
       const triangles = ply.indices ? ply.indices.length / 3 : 0;
@@ -631,6 +670,13 @@ function finish() {
 document.getElementById('show-boxes').addEventListener('change', (e) => { boxGroup.visible = e.target.checked; needsRender = true; });
 document.getElementById('show-trajectory').addEventListener('change', (e) => { trajectoryGroup.visible = e.target.checked; needsRender = true; });
 document.getElementById('colour-mode').addEventListener('change', (e) => setColourMode(e.target.value));
+// "c" switches between the surface colour and the class colours.
+window.addEventListener('keydown', (e) => {
+  if (e.key !== 'c' || e.target instanceof HTMLInputElement || e.target instanceof HTMLSelectElement) return;
+  const select = document.getElementById('colour-mode');
+  select.value = select.value === 'rgb' ? 'class' : 'rgb';
+  setColourMode(select.value);
+});
 document.getElementById('all-classes').addEventListener('click', () => setAllClasses(true));
 document.getElementById('no-classes').addEventListener('click', () => setAllClasses(false));
 
@@ -641,6 +687,8 @@ window.semapViewer = {
   objectCount: () => state.objects.length,
   vertexCount: () => (state.meshGeometry ? state.meshGeometry.getAttribute('position').count : 0),
   get liveVersion() { return state.liveVersion ?? null; },
+  colourMode: () => document.getElementById('colour-mode').value,
+  cameraUp: () => camera.up.toArray(),
   visibleTriangleCount: () => (state.meshGeometry && state.meshGeometry.index ? state.meshGeometry.index.count / 3 : 0),
   // Page coordinates of an object's box centre (for clicking it in tests).
   objectScreenPosition(index) {

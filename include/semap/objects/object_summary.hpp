@@ -22,7 +22,8 @@ struct OrientedBox {
 struct ObjectSummary {
   uint32_t id = 0;
   ClassId class_id = 0;
-  std::map<std::string, double> class_distribution;  ///< class name -> mean score (>= 0.005)
+  std::map<std::string, double> class_distribution;  ///< class name -> share of the class evidence (>= 0.005)
+  double confidence = 0.0;  ///< mean detector score of the segments merged in (0..1)
   Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
   OrientedBox box;  ///< of the object's body (largest cluster, trimmed)
   Eigen::Vector3f aabb_min = Eigen::Vector3f::Zero(), aabb_max = Eigen::Vector3f::Zero();

@@ -33,10 +33,10 @@ struct TsdfConfig {
   double label_band_voxels = 2.0;  ///< labels update only voxels with |d| <= this * s
 
   // Colour.
-  bool colour_layer = false;  ///< RGB per voxel (3 bytes), weighted mean like the sdf
+  bool colour_layer = true;   ///< RGB per voxel (3 bytes), weighted mean like the sdf; on by default (coloured meshes)
 
   // Mesh (B7).
-  std::string mesh_colour = "class";  ///< "class" (core/labels.hpp palette) | "rgb"
+  std::string mesh_colour = "rgb";  ///< "rgb" (colour layer; the class palette without one) | "class" (core/labels.hpp palette)
   double mesh_min_weight = 0.0;       ///< cube corners need a weight above this to be meshed
   int mesh_min_label_votes = 2;       ///< compact label shown only with this vote margin (else 0)
   double mesh_min_label_probability = 0.9;  ///< Bayesian argmax shown only above this (else 0)
@@ -75,7 +75,7 @@ struct TsdfConfig {
     v.param("bayes_min_probability", bayes_min_probability, "", "floor of any class probability in the Bayesian layer");
     v.param("label_band_voxels", label_band_voxels, "voxels", "labels update voxels with |sdf| <= this * s");
     v.param("colour_layer", colour_layer, "", "keep an RGB colour per voxel");
-    v.param("mesh_colour", mesh_colour, "", "vertex colour: class (palette) | rgb (colour layer)");
+    v.param("mesh_colour", mesh_colour, "", "vertex colour: rgb (colour layer, palette without one) | class (palette); the label property is written either way");
     v.param("mesh_min_weight", mesh_min_weight, "", "cube corners need a weight above this to be meshed");
     v.param("mesh_min_label_votes", mesh_min_label_votes, "frames",
             "a vertex shows the compact label only when its vote margin reaches this (else unlabelled)");
