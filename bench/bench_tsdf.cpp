@@ -100,12 +100,12 @@ struct OursRunner : Runner {
     name = v.name;
     TsdfConfig cfg;
     cfg.voxel_size = voxel;
-    cfg.integrator = v.integrator;
+    cfg.integrator = *enum_value(kIntegratorNames, v.integrator);
     cfg.threads = threads;
     cfg.label_layer = v.labels;
     cfg.bayes_layer = v.bayes;
     cfg.colour_layer = v.colour;
-    cfg.max_range = 4.0;
+    cfg.max_depth = 4.0;
     tsdf = std::make_unique<SemanticTsdf>(cfg);
   }
   void integrate(const IntegrationInput& frame) override {

@@ -46,19 +46,10 @@ void emit(YAML::Emitter& out, const py::handle& value, const std::string& key) {
   }
 }
 
-/// The CLI's defaults, except that the mesh carries the surfaces' RGB colours (issue 15:
-/// mesh.colors), not the class palette (mesh.labels and semap.class_colors() give that).
-SemapConfig python_defaults() {
-  SemapConfig c;
-  c.tsdf.colour_layer = true;
-  c.tsdf.mesh_colour = "rgb";
-  return c;
-}
-
 }  // namespace
 
 SemapConfig config_from_python(const py::handle& config) {
-  SemapConfig c = python_defaults();
+  SemapConfig c;  // the CLI's defaults: mesh.colors are the surfaces' RGB colours
   const ParamTree tree = [&](ParamVisitor& v) { c.visit(v); };
   if (config.is_none()) return c;
   if (py::isinstance<py::dict>(config)) {

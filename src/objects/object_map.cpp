@@ -322,7 +322,10 @@ void ObjectMap::absorb_fragment(size_t i, const std::vector<char>& remove, Optim
 
 void ObjectMap::promote_or_delete(size_t step, bool ignore_recency, std::vector<char>& remove,
                                   OptimisationStats& stats) {
-  const double T = config_.optimise_every;
+  // T of the deletion rule s_i + n_i < T/10 (METHODS C5) is the window this pass looks back
+  // on: optimise_every frames for the periodic passes, fewer for the final pass of a run that
+  // ended between two (10 frames cannot give an instance the counts 50 frames would).
+  const double T = static_cast<double>(std::min<size_t>(step - last_optimisation_step_, config_.optimise_every));
   for (size_t i = 0; i < instances_.size(); ++i) {
     auto& inst = instances_[i];
     if (inst.state == InstanceState::kStable) continue;
@@ -390,6 +393,7 @@ OptimisationStats ObjectMap::optimise(size_t step, bool ignore_recency) {
   stats.before = instances_.size();
   std::vector<char> remove(instances_.size(), 0);
   promote_or_delete(step, ignore_recency, remove, stats);  // NEW / UNSTABLE (C5)
+  last_optimisation_step_ = step;
   stats.after_delete = stats.before - static_cast<size_t>(stats.deleted);
   if (config_.enable_merge) merge_stable_pairs(remove, stats);  // STABLE pairs (C5)
   stats.after_merge = stats.after_delete - static_cast<size_t>(stats.merged);

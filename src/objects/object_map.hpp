@@ -127,6 +127,7 @@ class ObjectMap {
   ObjectsConfig config_;
   std::vector<ObjectInstance> instances_;
   uint32_t next_id_ = 1;
+  size_t last_optimisation_step_ = 0;  ///< step of the previous optimise() (C5's window T)
 };
 
 }  // namespace semap

@@ -51,7 +51,7 @@ void ObjectMapper::finish() {
     ++timings_.optimisations;
   }
   const ObjectMapCounts c = counts();
-  spdlog::info("object map (C4, C5): {} instances created, {} folded at association, {} deleted ({} absorbed), "
+  spdlog::debug("object map (C4, C5): {} instances created, {} folded at association, {} deleted ({} absorbed), "
                "{} merged -> {} objects", c.created, c.covered, c.deleted, c.absorbed, c.merged, c.final);
 }
 

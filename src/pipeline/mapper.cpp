@@ -413,7 +413,7 @@ void Mapper::Impl::refresh_map(const Trajectory& optimised) {
     const Pose& online = frames[k].T_world_camera_online;
     corrections[static_cast<uint32_t>(k)] = (optimised[k].T_world_camera * online.inverse()).cast<float>();
     max_displacement = std::max(max_displacement, surface_displacement_m(online, optimised[k].T_world_camera,
-                                                                         config.tsdf.max_range));
+                                                                         config.tsdf.max_depth));
   }
   final_stats.max_pose_correction_m = max_displacement;
   if (final_stats.loop_edges == 0) return;

@@ -144,7 +144,7 @@ void check_run_is_usable(const std::string& input, const MapperStats& stats, con
   if (stats.segmented_frames > 0 && stats.segmentations_failed == stats.segmented_frames)
     throw Error(input, "every segmentation failed (" + stats.segmentation_error + ")");
   if (outputs.mesh.vertices.empty())
-    throw Error(input, "the map is empty: no frame had valid depth within tsdf.min_range..max_range");
+    throw Error(input, "the map is empty: no frame had valid depth within tsdf.min_depth..max_depth");
 }
 
 void write_run_report(const std::filesystem::path& dir, const RunResult& result, const MapOutputs& outputs) {
@@ -282,6 +282,9 @@ nlohmann::json to_json(const RunResult& r) {
       {"object_frames", m.object_frames},
       {"object_accumulations_skipped", m.object_accumulations_skipped},
       {"objects", m.objects},
+      {"objects_created", m.objects_created},  // C4, then removed by C5's delete and merge steps
+      {"objects_deleted", m.objects_deleted},
+      {"objects_merged", m.objects_merged},
       {"poses", std::string(enum_name(kPoseSourceNames, r.poses))},
       {"segmenter", m.segmenter},
       {"loop_edges", m.loop_edges},

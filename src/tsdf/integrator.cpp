@@ -55,8 +55,8 @@ FrameSetup setup_frame(const TsdfMap& map, const IntegrationInput& in) {
   f.delta = static_cast<float>(cfg.truncation());
   f.eps = static_cast<float>(cfg.epsilon());
   f.label_band = static_cast<float>(cfg.label_band_voxels * cfg.voxel_size);
-  f.min_range = static_cast<float>(cfg.min_range);
-  f.max_range = static_cast<float>(cfg.max_range);
+  f.min_range = static_cast<float>(cfg.min_depth);
+  f.max_range = static_cast<float>(cfg.max_depth);
   f.default_confidence = static_cast<float>(cfg.bayes_default_confidence);
   f.confusion_classes = cfg.bayes_confusion_classes;
   f.labels = check(in.labels, CV_8UC1, "labels");
@@ -655,13 +655,10 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
 
 }  // namespace
 
-std::unique_ptr<Integrator> make_integrator(const std::string& name, const TsdfConfig& config) {
-  if (name == "grouped") return std::make_unique<GroupedIntegrator>(config);
-  if (name == "projective") return std::make_unique<ProjectiveIntegrator>(config);
-  throw Error("tsdf.integrator", "unknown integrator '" + name + "' (grouped | projective)");
+std::unique_ptr<Integrator> make_integrator(IntegratorKind kind, const TsdfConfig& config) {
+  if (kind == IntegratorKind::grouped) return std::make_unique<GroupedIntegrator>(config);
+  return std::make_unique<ProjectiveIntegrator>(config);
 }
-
-std::vector<std::string> integrator_names() { return {"grouped", "projective"}; }
 
 PointGroup group_points(const std::vector<LabelledPoint>& points) {
   PointGroup g;

@@ -17,7 +17,7 @@ namespace semap {
 
 /// One frame to integrate. Only `depth` is required; every image is registered to depth.
 struct IntegrationInput {
-  cv::Mat depth;          ///< CV_32FC1 metres; NaN/0/< min_range/> max_range skipped
+  cv::Mat depth;          ///< CV_32FC1 metres; NaN/0/< tsdf.min_depth / > max_depth skipped
   PinholeIntrinsics intrinsics;
   Pose T_world_camera = Pose::Identity();
   cv::Mat labels;         ///< optional CV_8UC1 project class ids, 0 = no label (geometry only)
@@ -46,9 +46,7 @@ class Integrator {
   IntegrationStats stats_;
 };
 
-/// "grouped" | "projective"; throws semap::Error("tsdf.integrator", ...) for other names.
-std::unique_ptr<Integrator> make_integrator(const std::string& name, const TsdfConfig& config);
-std::vector<std::string> integrator_names();
+std::unique_ptr<Integrator> make_integrator(IntegratorKind kind, const TsdfConfig& config);
 
 // ---- METHODS B5 grouping, exposed for tests ----
 

@@ -41,7 +41,7 @@ bool block_less(const BlockIndex& a, const BlockIndex& b) {
 
 MeshExtractor::BlockMesh MeshExtractor::mesh_block(const TsdfMap& map, const Block& block) {
   const bool use_bayes = map.has_bayes_layer();
-  const bool rgb = map.config().mesh_colour == "rgb" && map.has_colour_layer();
+  const bool rgb = map.config().mesh_colour == MeshColour::rgb && map.has_colour_layer();
   const float min_weight = static_cast<float>(map.config().mesh_min_weight);
   const int bayes_stride = map.bayes().bytes_per_voxel();
   const int min_votes = map.config().mesh_min_label_votes;

@@ -86,7 +86,7 @@ class SyntheticQuality : public ::testing::TestWithParam<std::string> {};
 TEST_P(SyntheticQuality, GroundTruthLabelsMeetTheIssueFigures) {
   TsdfConfig cfg;
   cfg.voxel_size = 0.02;
-  cfg.integrator = GetParam();
+  cfg.integrator = *enum_value(kIntegratorNames, GetParam());
   const FuseResult r = fuse_dataset(synthetic_dataset(), cfg, false, kFrames);
   const SemanticEvaluation e = evaluate(r.mesh);
   print(GetParam() + " GT labels", e, r.ms_per_frame);
@@ -119,7 +119,7 @@ TEST_P(SyntheticQuality, NoisyLabelsBayesianLayerAndCompactRule) {
   // grouped Bayes 0.965 / vote 0.892 (2 stray-class vertices), projective Bayes 0.953 / vote 0.954.
   TsdfConfig cfg;
   cfg.voxel_size = 0.02;
-  cfg.integrator = GetParam();
+  cfg.integrator = *enum_value(kIntegratorNames, GetParam());
   cfg.bayes_layer = true;  // mesh labels come from the Bayesian argmax
   const FuseResult bayes = fuse_dataset(synthetic_dataset(), cfg, true, kFrames);
   const SemanticEvaluation eb = evaluate(bayes.mesh);

@@ -19,6 +19,7 @@
 //   };
 #include <array>
 #include <functional>
+#include <optional>
 #include <limits>
 #include <span>
 #include <string>
@@ -69,6 +70,13 @@ constexpr std::string_view enum_name(const EnumNames<E, N>& names, E value) {
   for (const auto& n : names)
     if (n.value == value) return n.name;
   return {};
+}
+/// The value named `name`, or nullopt.
+template <class E, size_t N>
+constexpr std::optional<E> enum_value(const EnumNames<E, N>& names, std::string_view name) {
+  for (const auto& n : names)
+    if (n.name == name) return n.value;
+  return std::nullopt;
 }
 /// "a | b | c".
 template <class E, size_t N>

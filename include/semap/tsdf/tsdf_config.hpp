@@ -6,15 +6,33 @@
 
 namespace semap {
 
+/// How a frame is fused (METHODS B5-B6).
+enum class IntegratorKind {
+  projective,  ///< voxels projected into the image (nvblox/Open3D style): the default, fastest
+  grouped,     ///< semantic grouped ray casting of seed 003 (B5 + B6)
+};
+inline constexpr EnumNames<IntegratorKind, 2> kIntegratorNames{
+    {{IntegratorKind::projective, "projective"}, {IntegratorKind::grouped, "grouped"}}};
+
+/// What the mesh's vertex colour shows (the class id is written as its own property either way).
+enum class MeshColour {
+  rgb,           ///< the fused surface colour (the class palette when there is no colour layer)
+  class_palette, ///< the class colours of core/labels.hpp
+};
+inline constexpr EnumNames<MeshColour, 2> kMeshColourNames{{{MeshColour::rgb, "rgb"}, {MeshColour::class_palette, "class"}}};
+
 /// Parameters of the dense semantic TSDF (METHODS.md B3-B7, A6).
 struct TsdfConfig {
   // Geometry (METHODS B4, B6).
   double voxel_size = 0.02;        ///< s, metres
   double truncation_voxels = 4.0;  ///< delta = truncation_voxels * s (B6: 4)
   double epsilon_voxels = 1.0;     ///< epsilon = epsilon_voxels * s, start of the drop-off (B6: 1)
-  double min_range = 0.1;          ///< depth below this is skipped, metres
-  double max_range = 5.0;          ///< depth beyond this is skipped, metres
-  std::string integrator = "projective";  ///< "grouped" (B5+B6) | "projective" (nvblox/Open3D)
+  // The depth range has one name in every stage (tracking, tsdf, objects: min/max_depth); the
+  // values differ on purpose: fusion keeps 0.1-5 m (more of the room, the weight 1/z^2 already
+  // discounts far depth), tracking registers on 0.2-4.5 m, where depth noise (~z^2) is low.
+  double min_depth = 0.1;          ///< depth below this is not fused, metres
+  double max_depth = 5.0;          ///< depth beyond this is not fused, metres
+  IntegratorKind integrator = IntegratorKind::projective;
   int threads = 0;                 ///< worker threads, 0 = all cores
   int allocation_stride = 2;       ///< projective: every n-th pixel (each axis) allocates blocks
 
@@ -36,7 +54,7 @@ struct TsdfConfig {
   bool colour_layer = true;   ///< RGB per voxel (3 bytes), weighted mean like the sdf; on by default (coloured meshes)
 
   // Mesh (B7).
-  std::string mesh_colour = "rgb";  ///< "rgb" (colour layer; the class palette without one) | "class" (core/labels.hpp palette)
+  MeshColour mesh_colour = MeshColour::rgb;
   double mesh_min_weight = 0.0;       ///< cube corners need a weight above this to be meshed
   int mesh_min_label_votes = 2;       ///< compact label shown only with this vote margin (else 0)
   double mesh_min_label_probability = 0.9;  ///< Bayesian argmax shown only above this (else 0)
@@ -55,67 +73,45 @@ struct TsdfConfig {
 
   void visit(ParamVisitor& v) {
     v.param("voxel_size", voxel_size, "m", "voxel edge length s (from 1 mm: memory grows as 1/s^2 per frame)", {0.001, 1.0});
-    v.param("truncation_voxels", truncation_voxels, "voxels", "truncation delta = this * s (METHODS B6: 4)");
-    v.param("epsilon_voxels", epsilon_voxels, "voxels", "behind-surface weight drop-off starts at -this * s (B6: 1)");
-    v.param("min_range", min_range, "m", "depth below this is not integrated");
-    v.param("max_range", max_range, "m", "depth beyond this is not integrated");
-    v.param("integrator", integrator, "", "grouped (semantic grouped ray casting, B5+B6) | projective");
-    v.param("threads", threads, "", "integration/meshing threads, 0 = all cores");
+    v.param("truncation_voxels", truncation_voxels, "voxels", "truncation delta = this * s (METHODS B6: 4)", {1.0, 16.0});
+    v.param("epsilon_voxels", epsilon_voxels, "voxels", "behind-surface weight drop-off starts at -this * s (B6: 1)", non_negative(16.0));
+    v.param("min_depth", min_depth, "m", "depth below this is not fused (tracking has its own range)", non_negative(100.0));
+    v.param("max_depth", max_depth, "m", "depth beyond this is not fused", positive(100.0));
+    v.param("integrator", integrator, kIntegratorNames,
+            "projective (voxels projected into the image) | grouped (semantic grouped ray casting, B5+B6)");
+    v.param("threads", threads, "", "integration/meshing threads, 0 = all cores", {0, 1024});
     v.param("allocation_stride", allocation_stride, "px",
-            "projective integrator: every n-th pixel in each axis allocates blocks (Open3D uses 4)");
-    v.param("weight_unit", weight_unit, "", "finest step of the log-quantised u8 voxel weight");
-    v.param("weight_max", weight_max, "", "maximum accumulated voxel weight W_max (B6)");
+            "projective integrator: every n-th pixel in each axis allocates blocks (Open3D uses 4)", {1, 16});
+    v.param("weight_unit", weight_unit, "", "finest step of the log-quantised u8 voxel weight", positive(1e6));
+    v.param("weight_max", weight_max, "", "maximum accumulated voxel weight W_max (B6)", positive(1e9));
     v.param("label_layer", label_layer, "", "keep the compact label byte with its 1-byte vote confidence");
     v.param("bayes_layer", bayes_layer, "", "keep per-voxel top-k class probabilities (METHODS A6)");
-    v.param("bayes_top_k", bayes_top_k, "classes", "classes kept per voxel by the Bayesian layer");
-    v.param("bayes_default_confidence", bayes_default_confidence, "", "P(observed label) when no confidence/probabilities are given");
+    v.param("bayes_top_k", bayes_top_k, "classes", "classes kept per voxel by the Bayesian layer", {1, 8});
+    v.param("bayes_default_confidence", bayes_default_confidence, "", "P(observed label) when no confidence/probabilities are given", {0.0, 0.999, true});
     v.param("bayes_confusion_classes", bayes_confusion_classes, "classes",
             "label-only likelihood: a wrong label falls on one of this many confusable classes, so one frame "
-            "multiplies a label's odds by c*m/(1-c) (37 = errors spread over every class)");
-    v.param("bayes_min_probability", bayes_min_probability, "", "floor of any class probability in the Bayesian layer");
-    v.param("label_band_voxels", label_band_voxels, "voxels", "labels update voxels with |sdf| <= this * s");
+            "multiplies a label's odds by c*m/(1-c) (37 = errors spread over every class)", {1, 37});
+    v.param("bayes_min_probability", bayes_min_probability, "", "floor of any class probability in the Bayesian layer", {0.0, 0.1, true});
+    v.param("label_band_voxels", label_band_voxels, "voxels", "labels update voxels with |sdf| <= this * s", positive(16.0));
     v.param("colour_layer", colour_layer, "", "keep an RGB colour per voxel");
-    v.param("mesh_colour", mesh_colour, "", "vertex colour: rgb (colour layer, palette without one) | class (palette); the label property is written either way");
-    v.param("mesh_min_weight", mesh_min_weight, "", "cube corners need a weight above this to be meshed");
+    v.param("mesh_colour", mesh_colour, kMeshColourNames,
+            "vertex colour: rgb (colour layer, palette without one) | class (palette); the label property is written either way");
+    v.param("mesh_min_weight", mesh_min_weight, "", "cube corners need a weight above this to be meshed", non_negative());
     v.param("mesh_min_label_votes", mesh_min_label_votes, "frames",
-            "a vertex shows the compact label only when its vote margin reaches this (else unlabelled)");
+            "a vertex shows the compact label only when its vote margin reaches this (else unlabelled)", {0, 255});
     v.param("mesh_min_label_probability", mesh_min_label_probability, "",
-            "a vertex shows the Bayesian argmax only when its probability reaches this (else unlabelled)");
+            "a vertex shows the Bayesian argmax only when its probability reaches this (else unlabelled)", {0.0, 0.999});
     v.param("mesh_min_label_frames", mesh_min_label_frames, "frames",
             "a vertex shows the Bayesian argmax only when its odds against the runner-up reach r^this, "
-            "r = c*m/(1-c) the odds one label-only frame adds (c, m: bayes_default_confidence, bayes_confusion_classes)");
-    v.param("drop_distance", drop_distance, "m", "free blocks farther than this from the camera (0 = never)");
+            "r = c*m/(1-c) the odds one label-only frame adds (c, m: bayes_default_confidence, bayes_confusion_classes)", {0, 16});
+    v.param("drop_distance", drop_distance, "m", "free blocks farther than this from the camera (0 = never)", non_negative(1e6));
   }
   void validate() const {
     check_param_ranges(*this, "tsdf");
-    require_param(truncation_voxels >= 1 && truncation_voxels <= 16, "tsdf.truncation_voxels", "must be in [1, 16]");
     require_param(epsilon_voxels >= 0 && epsilon_voxels < truncation_voxels, "tsdf.epsilon_voxels",
                   "must be in [0, truncation_voxels)");
-    require_param(min_range >= 0, "tsdf.min_range", "must be >= 0");
-    require_param(max_range > min_range, "tsdf.max_range", "must be > min_range");
-    require_param(integrator == "grouped" || integrator == "projective", "tsdf.integrator",
-                  "must be grouped or projective");
-    require_param(threads >= 0, "tsdf.threads", "must be >= 0");
-    require_param(allocation_stride >= 1 && allocation_stride <= 16, "tsdf.allocation_stride", "must be in [1, 16]");
-    require_param(weight_unit > 0, "tsdf.weight_unit", "must be > 0");
+    require_param(max_depth > min_depth, "tsdf.max_depth", "must be > min_depth");
     require_param(weight_max > weight_unit, "tsdf.weight_max", "must be > weight_unit");
-    require_param(bayes_top_k >= 1 && bayes_top_k <= 8, "tsdf.bayes_top_k", "must be in [1, 8]");
-    require_param(bayes_default_confidence > 0 && bayes_default_confidence < 1, "tsdf.bayes_default_confidence",
-                  "must be in (0, 1)");
-    require_param(bayes_confusion_classes >= 1 && bayes_confusion_classes <= 37, "tsdf.bayes_confusion_classes",
-                  "must be in [1, 37]");
-    require_param(bayes_min_probability > 0 && bayes_min_probability < 0.1, "tsdf.bayes_min_probability",
-                  "must be in (0, 0.1)");
-    require_param(label_band_voxels > 0, "tsdf.label_band_voxels", "must be > 0");
-    require_param(mesh_colour == "class" || mesh_colour == "rgb", "tsdf.mesh_colour", "must be class or rgb");
-    require_param(mesh_min_weight >= 0, "tsdf.mesh_min_weight", "must be >= 0");
-    require_param(mesh_min_label_votes >= 0 && mesh_min_label_votes <= 255, "tsdf.mesh_min_label_votes",
-                  "must be in [0, 255]");
-    require_param(mesh_min_label_probability >= 0 && mesh_min_label_probability < 1,
-                  "tsdf.mesh_min_label_probability", "must be in [0, 1)");
-    require_param(mesh_min_label_frames >= 0 && mesh_min_label_frames <= 16, "tsdf.mesh_min_label_frames",
-                  "must be in [0, 16]");
-    require_param(drop_distance >= 0, "tsdf.drop_distance", "must be >= 0");
   }
 };
 
