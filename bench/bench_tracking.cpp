@@ -4,7 +4,7 @@
 //   bench_tracking [DATASET_DIR] [--frames N] [--no-open3d] [--no-repair-compare]
 //                  [--no-loop-compare] [--deterministic] [--out-trajectory FILE] [--threads N]
 //                  [--set "key: value"]... (tracking parameters, YAML, as in the tracking: section)
-//   bench_tracking --k-table [--steps 1,3,5,10] [--deterministic] [--set ...]
+//   bench_tracking --k-table [--steps 1,3,5,10] [--deterministic] [--no-open3d: no baselines] [--set ...]
 //     issue 16: every k-th frame of tum_fr1_rpy and 7scenes_redkitchen (TUM-layout slices of
 //     links in a temp dir, tests/sequence_slices), ATE / RPE / lost / ms per frame of ours,
 //     Open3D's and OpenCV's (cv::rgbd::RgbdICPOdometry) odometry on the same frames: a text
@@ -150,7 +150,7 @@ std::string cell(const json& j, const char* lost_key) {
 }
 
 /// Issue 16: the k-table (every k-th frame of both shared sequences, ours beside the baselines).
-int run_k_table(const std::vector<size_t>& steps, const TrackingConfig& config) {
+int run_k_table(const std::vector<size_t>& steps, const TrackingConfig& config, bool baselines) {
   namespace fs = std::filesystem;
   const fs::path tmp = fs::temp_directory_path() / ("semap_bench_slices_" + std::to_string(::getpid()));
   json report = json::array();
@@ -174,12 +174,16 @@ int run_k_table(const std::vector<size_t>& steps, const TrackingConfig& config) 
       row["ours"] = run_ours(frames, reader->camera(), config, gt, nullptr);
       std::string o3 = "n/a", ocv = "n/a";
 #ifdef SEMAP_HAVE_OPEN3D
-      row["open3d_hybrid"] = run_open3d(frames, reader->camera(), gt);
-      o3 = cell(row["open3d_hybrid"], "failures");
+      if (baselines) {
+        row["open3d_hybrid"] = run_open3d(frames, reader->camera(), gt);
+        o3 = cell(row["open3d_hybrid"], "failures");
+      }
 #endif
 #ifdef SEMAP_HAVE_OPENCV_RGBD
-      row["opencv_rgbd_icp"] = run_opencv(frames, reader->camera(), gt);
-      ocv = cell(row["opencv_rgbd_icp"], "failures");
+      if (baselines) {
+        row["opencv_rgbd_icp"] = run_opencv(frames, reader->camera(), gt);
+        ocv = cell(row["opencv_rgbd_icp"], "failures");
+      }
 #endif
       std::fprintf(stderr, "%-20s %3zu %6zu | %s | %s | %s\n", name.c_str(), k, frames.size(),
                    cell(row["ours"], "lost_frames").c_str(), o3.c_str(), ocv.c_str());
@@ -223,7 +227,7 @@ int main(int argc, char** argv) {
       config.background_loop_closure = !deterministic;
       for (const auto& o : overrides) load_config_string(o, "--set", [&](ParamVisitor& v) { config.visit(v); });
       config.validate();
-      return run_k_table(steps, config);
+      return run_k_table(steps, config, open3d);
     }
     auto reader = open_dataset(dataset);
     const size_t n = max_frames ? std::min(max_frames, reader->size()) : reader->size();

@@ -8,6 +8,7 @@
 #include <map>
 #include <mutex>
 #include <numeric>
+#include <opencv2/calib3d.hpp>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <thread>
@@ -119,6 +120,7 @@ struct Tracker::Impl {
     cfg.validate();
     orb = cv::ORB::create(cfg.orb_features, float(cfg.orb_scale_factor), cfg.orb_levels, 19, 0, 2,
                           cv::ORB::HARRIS_SCORE, 31, cfg.orb_fast_threshold);
+    init_undistortion();
     icp_params = cfg.icp;
     // Wide-baseline ICP (issue 16): twice the coarse iterations, the basin is at the coarse levels.
     wide_icp_params = cfg.icp;
@@ -148,6 +150,27 @@ struct Tracker::Impl {
     }
     cv.notify_all();
     if (worker.joinable()) worker.join();
+  }
+
+  /// Lens undistortion maps (CameraModel::distortion, issue 16), empty without distortion:
+  /// tracking then works in the ideal pinhole image of the same intrinsics.
+  cv::Mat undistort_map1, undistort_map2;
+  void init_undistortion() {
+    if (!camera.has_distortion()) return;
+    std::array<double, 5> d = camera.distortion;
+    const cv::Mat K = (cv::Mat_<double>(3, 3) << intr.fx, 0, intr.cx, 0, intr.fy, intr.cy, 0, 0, 1);
+    const cv::Mat D(1, 5, CV_64F, d.data());
+    cv::initUndistortRectifyMap(K, D, cv::Mat(), K, cv::Size(intr.width, intr.height), CV_16SC2, undistort_map1,
+                                undistort_map2);
+  }
+  /// Depth by nearest neighbour (no mixing across edges), grey bilinear.
+  void undistort(cv::Mat& depth, cv::Mat& gray) const {
+    if (undistort_map1.empty()) return;
+    cv::Mat d, g;
+    cv::remap(depth, d, undistort_map1, undistort_map2, cv::INTER_NEAREST, cv::BORDER_CONSTANT, cv::Scalar(0));
+    cv::remap(gray, g, undistort_map1, undistort_map2, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+    depth = d;
+    gray = g;
   }
 
   /// Keyframe (ICP target) pyramid; `source_only` for a tracked frame (completed by
@@ -362,7 +385,8 @@ struct Tracker::Impl {
       DepthRepairParams rp{cfg.depth_repair_radius, cfg.depth_repair_gray_threshold, cfg.depth_repair_min_support};
       depth = repair_depth(frame.depth, gray, rp);
     }
-    result.depth = depth;
+    result.depth = depth;  // the frame's own pixel grid (the map integrates it with the colour)
+    undistort(depth, gray);
     result.timings.repair_ms = ms_since(t0);
 
     t0 = Clock::now();

@@ -104,8 +104,8 @@ struct TrackingConfig {
   double keyframe_translation = 0.12;  ///< motion from the reference keyframe that makes a new one, metres
   double keyframe_rotation_deg = 12.0; ///< same for rotation, degrees
   double keyframe_min_overlap = 0.5;  ///< ICP overlap below this makes a new keyframe (fraction)
-  double keyframe_max_icp_rmse = 0.015;  ///< ICP RMSE above this makes a new keyframe (before it reaches the loss limit), metres
-  int keyframe_min_inliers = 60;       ///< fewer RANSAC inliers make a new keyframe (features thinning out)
+  double keyframe_max_icp_rmse = 0.02;   ///< ICP RMSE above this makes a new keyframe (before it reaches the loss limit), metres
+  int keyframe_min_inliers = 30;       ///< fewer RANSAC inliers make a new keyframe (features thinning out)
   bool keyframe_reuse = true;          ///< track against an older keyframe near the current pose instead of making a new one
   double keyframe_reuse_max_score = 0.8;  ///< max (dt/keyframe_translation + drot/keyframe_rotation) for reuse
 
