@@ -4,6 +4,11 @@
 //   bench_tracking [DATASET_DIR] [--frames N] [--no-open3d] [--no-repair-compare]
 //                  [--no-loop-compare] [--deterministic] [--out-trajectory FILE] [--threads N]
 //                  [--set "key: value"]... (tracking parameters, YAML, as in the tracking: section)
+//   bench_tracking --k-table [--steps 1,3,5,10] [--deterministic] [--no-open3d: no baselines] [--set ...]
+//     issue 16: every k-th frame of tum_fr1_rpy and 7scenes_redkitchen (TUM-layout slices of
+//     links in a temp dir, tests/sequence_slices), ATE / RPE / lost / ms per frame of ours,
+//     Open3D's and OpenCV's (cv::rgbd::RgbdICPOdometry) odometry on the same frames: a text
+//     table on stderr, JSON on stdout.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -13,6 +18,8 @@
 #include <opencv2/imgproc.hpp>
 #include <ctime>
 #include <string>
+#include <filesystem>
+#include <unistd.h>
 #include <vector>
 
 #include "semap/core/error.hpp"
@@ -23,6 +30,8 @@
 #include "tracking/tracker.hpp"
 
 #include "bench/open3d_odometry.hpp"
+#include "bench/opencv_odometry.hpp"
+#include "sequence_slices.hpp"
 
 using namespace semap;
 using json = nlohmann::json;
@@ -108,13 +117,93 @@ json run_open3d(const std::vector<Frame>& frames, const CameraModel& camera, con
   return j;
 }
 #endif
+
+#ifdef SEMAP_HAVE_OPENCV_RGBD
+json run_opencv(const std::vector<Frame>& frames, const CameraModel& camera, const Trajectory& gt) {
+  const baseline::OpencvOdometryRun run = baseline::run_opencv_odometry(frames, camera);
+  json j = evaluate(gt, run.trajectory);
+  j["median_frame_ms"] = median(run.frame_ms);
+  j["failures"] = run.failures;
+  return j;
+}
+#endif
+
+std::vector<size_t> parse_steps(const std::string& text) {
+  std::vector<size_t> steps;
+  size_t pos = 0;
+  while (pos < text.size()) {
+    const size_t comma = text.find(',', pos);
+    steps.push_back(std::stoul(text.substr(pos, comma - pos)));
+    if (comma == std::string::npos) break;
+    pos = comma + 1;
+  }
+  return steps;
+}
+
+/// One "ATE cm / RPE cm/s / RPE deg/s / lost / ms" cell of the k-table.
+std::string cell(const json& j, const char* lost_key) {
+  char buf[96];
+  std::snprintf(buf, sizeof(buf), "%6.2f %6.2f %6.2f %4zu %6.1f", 100 * j["ate_rmse_m"].get<double>(),
+                100 * j["rpe_trans_rmse_m_per_s"].get<double>(), j["rpe_rot_rmse_deg_per_s"].get<double>(),
+                j.value(lost_key, size_t(0)), j["median_frame_ms"].get<double>());
+  return buf;
+}
+
+/// Issue 16: the k-table (every k-th frame of both shared sequences, ours beside the baselines).
+int run_k_table(const std::vector<size_t>& steps, const TrackingConfig& config, bool baselines) {
+  namespace fs = std::filesystem;
+  const fs::path tmp = fs::temp_directory_path() / ("semap_bench_slices_" + std::to_string(::getpid()));
+  json report = json::array();
+  std::fprintf(stderr, "%-20s %3s %6s | %-33s | %-33s | %-33s\n", "sequence", "k", "frames",
+               "ours: ATE cm RPE cm/s deg/s lost ms", "Open3D hybrid", "OpenCV RgbdICP");
+  for (const std::string name : {"tum_fr1_rpy", "7scenes_redkitchen"}) {
+    const fs::path source = fs::path(SEMAP_SHARED_DIR) / "data" / name;
+    if (!fs::exists(source)) {
+      std::fprintf(stderr, "%s: missing, skipped\n", source.c_str());
+      continue;
+    }
+    for (size_t k : steps) {
+      test::SliceSpec spec;
+      spec.step = k;
+      const test::SequenceSlice slice = test::write_sequence_slice(source, spec, tmp / (name + std::to_string(k)));
+      auto reader = open_dataset(slice.dir);
+      std::vector<Frame> frames;
+      for (size_t i = 0; i < reader->size(); ++i) frames.push_back(reader->load(i));
+      const Trajectory gt = reader->ground_truth();
+      json row = {{"sequence", name}, {"k", k}, {"frames", frames.size()}};
+      row["ours"] = run_ours(frames, reader->camera(), config, gt, nullptr);
+      std::string o3 = "n/a", ocv = "n/a";
+#ifdef SEMAP_HAVE_OPEN3D
+      if (baselines) {
+        row["open3d_hybrid"] = run_open3d(frames, reader->camera(), gt);
+        o3 = cell(row["open3d_hybrid"], "failures");
+      }
+#endif
+#ifdef SEMAP_HAVE_OPENCV_RGBD
+      if (baselines) {
+        row["opencv_rgbd_icp"] = run_opencv(frames, reader->camera(), gt);
+        ocv = cell(row["opencv_rgbd_icp"], "failures");
+      }
+#endif
+      std::fprintf(stderr, "%-20s %3zu %6zu | %s | %s | %s\n", name.c_str(), k, frames.size(),
+                   cell(row["ours"], "lost_frames").c_str(), o3.c_str(), ocv.c_str());
+      report.push_back(row);
+      fs::remove_all(tmp / (name + std::to_string(k)));
+    }
+  }
+  std::error_code ec;
+  fs::remove_all(tmp, ec);
+  std::cout << report.dump(2) << std::endl;
+  return 0;
+}
 }  // namespace
 
 int main(int argc, char** argv) {
   try {
     std::string dataset = std::string(SEMAP_SHARED_DIR) + "/data/tum_fr1_rpy";
     size_t max_frames = 0;
-    bool open3d = true, repair_compare = true, loop_compare = true, deterministic = false;
+    bool open3d = true, repair_compare = true, loop_compare = true, deterministic = false, k_table = false;
+    std::vector<size_t> steps = {1, 3, 5, 10};
     std::string out_trajectory;
     std::vector<std::string> overrides;
     for (int i = 1; i < argc; ++i) {
@@ -124,12 +213,21 @@ int main(int argc, char** argv) {
       else if (a == "--no-repair-compare") repair_compare = false;
       else if (a == "--no-loop-compare") loop_compare = false;
       else if (a == "--deterministic") deterministic = true;
+      else if (a == "--k-table") k_table = true;
+      else if (a == "--steps" && i + 1 < argc) steps = parse_steps(argv[++i]);
       else if (a == "--verbose") verbose = true;
       else if (a == "--threads" && i + 1 < argc) cv::setNumThreads(std::stoi(argv[++i]));  // OpenCV/TBB workers
       else if (a == "--out-trajectory" && i + 1 < argc) out_trajectory = argv[++i];
       else if (a == "--set" && i + 1 < argc) overrides.push_back(argv[++i]);
       else if (!a.empty() && a[0] != '-') dataset = a;
       else throw Error(a, "unknown argument");
+    }
+    if (k_table) {
+      TrackingConfig config;
+      config.background_loop_closure = !deterministic;
+      for (const auto& o : overrides) load_config_string(o, "--set", [&](ParamVisitor& v) { config.visit(v); });
+      config.validate();
+      return run_k_table(steps, config, open3d);
     }
     auto reader = open_dataset(dataset);
     const size_t n = max_frames ? std::min(max_frames, reader->size()) : reader->size();

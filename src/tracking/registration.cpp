@@ -581,8 +581,7 @@ IcpResult icp_point_to_plane(const std::vector<DepthLevel>& source, const std::v
   Accumulator last_fine;          // last level-0 system, for the final statistics
   bool fine_converged = false;    // level 0 ended on a negligible update
   for (int l = levels - 1; l >= 0 && !failed; --l) {
-    const int iterations = params.iterations.empty() ? 0
-                           : params.iterations[std::min<size_t>(l, params.iterations.size() - 1)];
+    const int iterations = params.iterations_at(l);
     const int stride = l == 0 ? std::max(1, params.stride) : std::max({1, params.min_stride, params.stride >> l});
     const double max_dist = params.max_distance * std::pow(2.0, l);
     // Coarser pixels resolve the pose more coarsely: the stop threshold grows per level.

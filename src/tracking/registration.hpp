@@ -10,6 +10,7 @@
 
 #include "semap/core/camera.hpp"
 #include "semap/core/pose.hpp"
+#include "semap/tracking/tracking_config.hpp"  // IcpParams
 
 namespace semap {
 
@@ -80,25 +81,6 @@ void complete_target_pyramid(std::vector<DepthLevel>& pyramid, bool with_normals
 /// normals at full resolution are too noisy to gate with).
 inline bool icp_uses_source_normals(const DepthLevel& level) { return level.vertices.cols < 640; }
 
-struct IcpParams {
-  std::vector<int> iterations = {4, 6, 10};  ///< per level, level 0 first
-  int stride = 2;                  ///< source pixel step at level 0, halved per level up
-  int min_stride = 1;              ///< lower bound of the step at the coarser levels (level >= 1)
-  double max_distance = 0.10;      ///< metres at level 0, doubled per level up
-  double max_normal_angle_deg = 35.0;
-  double huber_delta = 0.01;       ///< metres
-  double convergence_update = 1e-5;  ///< stop level 0 when |update| falls below (rad, m)
-  double convergence_level_scale = 1.0;  ///< level l stops below convergence_update * scale^l
-  double converged_update = 2e-3;  ///< last update above this = not converged
-  /// Photometric term (joint geometric + photometric ICP as in ElasticFusion / Open3D's hybrid
-  /// odometry): weight of the squared intensity residual relative to the squared point-to-plane
-  /// residual in metres, i.e. (sigma_geometric / sigma_intensity)^2. 0 = geometry only. Needs
-  /// intensity in both pyramids.
-  double photometric_weight = 0.0;
-  double photometric_huber = 0.1;   ///< Huber threshold of the intensity residual (intensity in [0, 1])
-  double photometric_max_depth_difference = 0.05;  ///< occlusion test against the target depth, metres
-  bool photometric_bias = false;    ///< estimate a global brightness offset (auto exposure) by alternation
-};
 struct IcpResult {
   bool converged = false;
   Pose T_target_source = Pose::Identity();

@@ -8,6 +8,7 @@
 #include <map>
 #include <mutex>
 #include <numeric>
+#include <opencv2/calib3d.hpp>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <thread>
@@ -60,13 +61,25 @@ struct FrameRecord {
 
 /// Outcome of registering a frame against a keyframe (A2).
 struct Registration {
-  bool ok = false;
+  bool ok = false;                 ///< ICP converged with acceptable residual and overlap
+  bool feature_supported = false;  ///< trusted RANSAC estimate that the ICP result agrees with
+  bool accepted = false;           ///< ok, and feature-supported or plausible against the prior
   Pose T_kf_frame = Pose::Identity();
   int matches = 0, inliers = 0;
   bool used_prior = false;
   IcpResult icp;
   double ransac_ms = 0, icp_ms = 0;
 };
+
+/// How hard a registration tries: the per-frame path first, the wide-baseline one only when
+/// that failed (issue 16: consecutive-frame speed stays as it was).
+enum class Effort { normal, wide };
+
+/// Translation + rotation (radians x 0.5 m lever) distance of two poses, metres.
+double pose_distance(const Pose& a, const Pose& b) {
+  const Pose d = a.inverse() * b;
+  return d.translation().norm() + 0.5 * rotation_angle(d);
+}
 }  // namespace
 
 struct Tracker::Impl {
@@ -74,7 +87,7 @@ struct Tracker::Impl {
   CameraModel camera;
   PinholeIntrinsics intr;
   cv::Ptr<cv::ORB> orb;
-  IcpParams icp_params;
+  IcpParams icp_params, wide_icp_params;
 
   // Shared with the loop-closure worker (guarded by mutex).
   mutable std::mutex mutex;
@@ -107,21 +120,12 @@ struct Tracker::Impl {
     cfg.validate();
     orb = cv::ORB::create(cfg.orb_features, float(cfg.orb_scale_factor), cfg.orb_levels, 19, 0, 2,
                           cv::ORB::HARRIS_SCORE, 31, cfg.orb_fast_threshold);
-    icp_params.iterations = {cfg.icp_iterations_fine, cfg.icp_iterations_mid};
-    for (int l = 2; l < cfg.icp_levels; ++l) icp_params.iterations.push_back(cfg.icp_iterations_coarse);
-    icp_params.iterations.resize(cfg.icp_levels);
-    icp_params.stride = cfg.icp_stride;
-    icp_params.min_stride = cfg.icp_min_stride;
-    icp_params.max_distance = cfg.icp_max_distance;
-    icp_params.max_normal_angle_deg = cfg.icp_max_normal_angle_deg;
-    icp_params.huber_delta = cfg.icp_huber_delta;
-    icp_params.convergence_update = cfg.icp_convergence_update;
-    icp_params.convergence_level_scale = cfg.icp_convergence_level_scale;
-    icp_params.converged_update = cfg.icp_converged_update;
-    icp_params.photometric_weight = cfg.icp_photometric_weight;
-    icp_params.photometric_huber = cfg.icp_photometric_huber;
-    icp_params.photometric_max_depth_difference = cfg.icp_photometric_max_depth_difference;
-    icp_params.photometric_bias = cfg.icp_photometric_bias;
+    init_undistortion();
+    icp_params = cfg.icp;
+    // Wide-baseline ICP (issue 16): twice the coarse iterations, the basin is at the coarse levels.
+    wide_icp_params = cfg.icp;
+    wide_icp_params.iterations_coarse = 2 * cfg.icp.iterations_coarse;
+    wide_icp_params.iterations_mid = 2 * cfg.icp.iterations_mid;
     if (cfg.background_loop_closure) worker = std::thread([this] { worker_loop(); });
   }
 
@@ -148,21 +152,69 @@ struct Tracker::Impl {
     if (worker.joinable()) worker.join();
   }
 
+  /// Lens undistortion maps (CameraModel::distortion, issue 16), empty without distortion:
+  /// tracking then works in the ideal pinhole image of the same intrinsics.
+  cv::Mat undistort_map1, undistort_map2;
+  void init_undistortion() {
+    if (!camera.has_distortion()) return;
+    std::array<double, 5> d = camera.distortion;
+    const cv::Mat K = (cv::Mat_<double>(3, 3) << intr.fx, 0, intr.cx, 0, intr.fy, intr.cy, 0, 0, 1);
+    const cv::Mat D(1, 5, CV_64F, d.data());
+    cv::initUndistortRectifyMap(K, D, cv::Mat(), K, cv::Size(intr.width, intr.height), CV_16SC2, undistort_map1,
+                                undistort_map2);
+  }
+  /// Depth by nearest neighbour (no mixing across edges), grey bilinear.
+  void undistort(cv::Mat& depth, cv::Mat& gray) const {
+    if (undistort_map1.empty()) return;
+    cv::Mat d, g;
+    cv::remap(depth, d, undistort_map1, undistort_map2, cv::INTER_NEAREST, cv::BORDER_CONSTANT, cv::Scalar(0));
+    cv::remap(gray, g, undistort_map1, undistort_map2, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+    depth = d;
+    gray = g;
+  }
+
   /// Keyframe (ICP target) pyramid; `source_only` for a tracked frame (completed by
   /// make_keyframe if it becomes one; METHODS.md A2 step 4).
   std::vector<DepthLevel> pyramid(const cv::Mat& depth, const cv::Mat& gray, bool source_only = false) const {
-    return build_depth_pyramid(depth, intr, cfg.icp_levels, cfg.min_depth, cfg.max_depth, true,
-                               cfg.icp_photometric_weight > 0 ? gray : cv::Mat(), source_only);
+    return build_depth_pyramid(depth, intr, cfg.icp.levels, cfg.min_depth, cfg.max_depth, true,
+                               cfg.icp.photometric_weight > 0 ? gray : cv::Mat(), source_only);
   }
 
   bool icp_acceptable(const IcpResult& icp, double max_rmse, double min_overlap) const {
     return icp.converged && icp.rmse <= max_rmse && icp.overlap >= min_overlap;
   }
 
-  /// A2: features -> voting RANSAC -> ICP (from RANSAC, else from the prior).
+  /// An estimate without trusted feature support must stay near the motion prior (A2).
+  bool plausible(const Pose& prior, const Pose& T_ref_frame) const {
+    const Pose jump = prior.inverse() * T_ref_frame;
+    return jump.translation().norm() <= cfg.loss_max_translation_jump &&
+           deg(rotation_angle(jump)) <= cfg.loss_max_rotation_jump_deg;
+  }
+
+  /// Judges an ICP result from the registration's own evidence (issue 16): converged with
+  /// acceptable residual and overlap; trusted when a well-supported RANSAC estimate agrees
+  /// with it, else it must be plausible against the prior (without a prior: not accepted).
+  void judge(Registration& reg, const RansacResult& ransac, bool trusted, const Pose* prior) const {
+    reg.T_kf_frame = reg.icp.T_target_source;
+    reg.ok = icp_acceptable(reg.icp, cfg.loss_max_icp_rmse, cfg.loss_min_overlap);
+    reg.feature_supported = trusted && pose_distance(ransac.T, reg.T_kf_frame) <= cfg.ransac_icp_agreement;
+    reg.accepted = reg.ok && (reg.feature_supported || (prior && plausible(*prior, reg.T_kf_frame)));
+  }
+
+  /// The wide-baseline ICP gate: grows with how far the start may be off (the prior's own step).
+  IcpParams wide_params(double expected_error_m) const {
+    IcpParams p = wide_icp_params;
+    p.max_distance = std::clamp(cfg.wide_icp_gate_factor * expected_error_m, cfg.icp.max_distance,
+                                std::max(cfg.icp.max_distance, cfg.wide_icp_max_distance));
+    return p;
+  }
+
+  /// A2: features -> voting RANSAC -> ICP from RANSAC, else (or when that is not accepted)
+  /// from the prior. `prior_step_m`: how far the prior may be off (its own step), for the gate.
   Registration register_to(const FrameFeatures& frame_features, const std::vector<DepthLevel>& frame_pyramid,
                            const FrameFeatures& kf_features, const std::vector<DepthLevel>& kf_pyramid,
-                           const Pose* prior, uint32_t seed) const {
+                           const Pose* prior, uint32_t seed, Effort effort = Effort::normal,
+                           double prior_step_m = 0.0) const {
     Registration reg;
     auto t0 = Clock::now();
     const auto pairs = match_features(frame_features, kf_features, cfg.match_ratio, cfg.match_max_hamming);
@@ -173,31 +225,30 @@ struct Tracker::Impl {
       dst.push_back(kf_features.points[t]);
     }
     RansacParams rp;
-    rp.iterations = cfg.ransac_iterations;
+    rp.iterations = effort == Effort::wide ? cfg.wide_ransac_iterations : cfg.ransac_iterations;
     rp.inlier_distance = cfg.ransac_inlier_distance;
     rp.min_inliers = cfg.ransac_min_inliers;
     rp.seed = seed;
     const RansacResult ransac = ransac_rigid(src, dst, rp);
     reg.inliers = ransac.ok ? int(ransac.inliers.size()) : 0;
+    const bool trusted = ransac.ok && reg.inliers >= cfg.ransac_trusted_inliers &&
+                         reg.inliers >= cfg.ransac_trusted_ratio * reg.matches;
     reg.ransac_ms = ms_since(t0);
     t0 = Clock::now();
-    if (!ransac.ok && !prior) {
-      reg.icp_ms = ms_since(t0);
-      return reg;
+    const IcpParams& params = effort == Effort::wide ? wide_icp_params : icp_params;
+    if (ransac.ok) {
+      reg.icp = icp_point_to_plane(frame_pyramid, kf_pyramid, ransac.T, params);
+      judge(reg, ransac, trusted, prior);
     }
-    Pose start = ransac.ok ? ransac.T : *prior;
-    reg.used_prior = !ransac.ok;
-    reg.icp = icp_point_to_plane(frame_pyramid, kf_pyramid, start, icp_params);
     // RANSAC on a few bad matches can mislead ICP; the prior is the second chance.
-    if (ransac.ok && prior && !icp_acceptable(reg.icp, cfg.loss_max_icp_rmse, cfg.loss_min_overlap)) {
-      IcpResult second = icp_point_to_plane(frame_pyramid, kf_pyramid, *prior, icp_params);
-      if (icp_acceptable(second, cfg.loss_max_icp_rmse, cfg.loss_min_overlap)) {
-        reg.icp = second;
-        reg.used_prior = true;
-      }
+    if (!reg.accepted && prior) {
+      Registration second = reg;
+      second.icp = icp_point_to_plane(frame_pyramid, kf_pyramid, *prior,
+                                      effort == Effort::wide ? wide_params(prior_step_m) : icp_params);
+      judge(second, ransac, trusted, prior);
+      second.used_prior = true;
+      if (second.accepted || !ransac.ok) reg = second;
     }
-    reg.T_kf_frame = reg.icp.T_target_source;
-    reg.ok = icp_acceptable(reg.icp, cfg.loss_max_icp_rmse, cfg.loss_min_overlap);
     reg.icp_ms = ms_since(t0);
     return reg;
   }
@@ -334,7 +385,8 @@ struct Tracker::Impl {
       DepthRepairParams rp{cfg.depth_repair_radius, cfg.depth_repair_gray_threshold, cfg.depth_repair_min_support};
       depth = repair_depth(frame.depth, gray, rp);
     }
-    result.depth = depth;
+    result.depth = depth;  // the frame's own pixel grid (the map integrates it with the colour)
+    undistort(depth, gray);
     result.timings.repair_ms = ms_since(t0);
 
     t0 = Clock::now();
@@ -374,37 +426,27 @@ struct Tracker::Impl {
       std::lock_guard<std::mutex> lock(mutex);
       ref_kf = keyframes[reference];
     }
-    Registration reg = register_to(features, frame_pyramid, ref_kf->features, ref_pyramid, &prior,
-                                   uint32_t(cfg.seed) + uint32_t(frame.index));
+    const uint32_t seed = uint32_t(cfg.seed) + uint32_t(frame.index);
+    Registration reg = register_to(features, frame_pyramid, ref_kf->features, ref_pyramid, &prior, seed);
+    result.timings.ransac_ms = reg.ransac_ms;
+    result.timings.icp_ms = reg.icp_ms;
+    if (!reg.accepted) {  // the prior failed: wide-baseline effort (issue 16)
+      const double step = velocity_valid && !lost ? pose_distance(Pose::Identity(), velocity) : 0.0;
+      Registration wide = register_to(features, frame_pyramid, ref_kf->features, ref_pyramid, &prior,
+                                      seed * 2654435761u + 17u, Effort::wide, step);
+      result.timings.ransac_ms += wide.ransac_ms;
+      result.timings.icp_ms += wide.icp_ms;
+      if (wide.accepted) reg = wide;
+    }
     result.feature_matches = reg.matches;
     result.ransac_inliers = reg.inliers;
     result.used_motion_prior = reg.used_prior;
-    result.timings.ransac_ms = reg.ransac_ms;
-    result.timings.icp_ms = reg.icp_ms;
-
-    bool ok = reg.ok;
+    bool ok = reg.accepted;
     if (std::getenv("SEMAP_TRACKING_DEBUG"))
-      std::fprintf(stderr, "[tracker] frame %zu ref %d ok %d conv %d rmse %.4f overlap %.3f inliers %d prior_t %.3f reg_t %.3f\n",
-                   frame.index, reference, int(reg.ok), int(reg.icp.converged), reg.icp.rmse, reg.icp.overlap,
-                   reg.inliers, prior.translation().norm(), reg.T_kf_frame.translation().norm());
-    auto plausible = [&](const Pose& T_ref_frame) {  // implausible jump from the motion prior = loss (A2)
-      const Pose jump = prior.inverse() * T_ref_frame;
-      return jump.translation().norm() <= cfg.loss_max_translation_jump &&
-             deg(rotation_angle(jump)) <= cfg.loss_max_rotation_jump_deg;
-    };
-    if (ok) ok = plausible(reg.T_kf_frame);
-    if (!ok && !reg.used_prior) {  // features misled ICP: second chance from the motion prior
-      const auto t_icp = Clock::now();
-      const IcpResult second = icp_point_to_plane(frame_pyramid, ref_pyramid, prior, icp_params);
-      if (icp_acceptable(second, cfg.loss_max_icp_rmse, cfg.loss_min_overlap) && plausible(second.T_target_source)) {
-        reg.icp = second;
-        reg.T_kf_frame = second.T_target_source;
-        reg.used_prior = true;
-        result.used_motion_prior = true;
-        ok = true;
-      }
-      result.timings.icp_ms += ms_since(t_icp);
-    }
+      std::fprintf(stderr, "[tracker] frame %zu ref %d ok %d acc %d sup %d conv %d rmse %.4f overlap %.3f matches %d inliers %d prior %d prior_t %.3f reg_t %.3f\n",
+                   frame.index, reference, int(reg.ok), int(reg.accepted), int(reg.feature_supported),
+                   int(reg.icp.converged), reg.icp.rmse, reg.icp.overlap, reg.matches, reg.inliers, int(reg.used_prior),
+                   prior.translation().norm(), reg.T_kf_frame.translation().norm());
     // Fern code only when used (relocalisation, keyframes, dissimilarity test): not per frame.
     FernCode code;
     auto fern_code = [&]() -> const FernCode& {
@@ -446,10 +488,12 @@ struct Tracker::Impl {
     result.icp_overlap = reg.icp.overlap;
 
     Pose T_ref_frame = reg.T_kf_frame;
-    // Keyframe decision: motion, overlap, or fern dissimilarity (A3).
+    // Keyframe decision: motion, overlap, weakening evidence (residual, feature support: renew
+    // the keyframe while the registration still holds, issue 16) or fern dissimilarity (A3).
     const bool far = T_ref_frame.translation().norm() > cfg.keyframe_translation ||
                      deg(rotation_angle(T_ref_frame)) > cfg.keyframe_rotation_deg ||
-                     reg.icp.overlap < cfg.keyframe_min_overlap;
+                     reg.icp.overlap < cfg.keyframe_min_overlap || reg.icp.rmse > cfg.keyframe_max_icp_rmse ||
+                     reg.inliers < cfg.keyframe_min_inliers;
     bool dissimilar = false;
     if (!far && cfg.fern_new_keyframe_similarity > 0) {  // similarity >= 0 always: test off at 0
       fern_code();
@@ -577,24 +621,34 @@ struct Tracker::Impl {
     return true;
   }
 
-  /// Registers a lost frame against the keyframes most similar by ferns (A3).
+  /// Keyframes a lost frame is registered against: the most similar by ferns (A3), the most
+  /// recent ones and the reference (the camera is usually still near where it was lost).
+  std::vector<std::shared_ptr<const Keyframe>> relocalisation_candidates(const FernCode& code) const {
+    std::vector<std::pair<double, std::shared_ptr<const Keyframe>>> by_fern;
+    std::vector<std::shared_ptr<const Keyframe>> out;
+    std::lock_guard<std::mutex> lock(mutex);
+    const auto sims = ferns.similarities(code);
+    for (size_t i = 0; i < sims.size(); ++i) by_fern.emplace_back(sims[i], keyframes[ferns.ids()[i]]);
+    std::stable_sort(by_fern.begin(), by_fern.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    auto add = [&](const std::shared_ptr<const Keyframe>& kf) {
+      if (std::find(out.begin(), out.end(), kf) == out.end()) out.push_back(kf);
+    };
+    add(keyframes[reference]);
+    for (int i = 0; i < int(by_fern.size()) && i < cfg.relocalisation_candidates; ++i) add(by_fern[i].second);
+    for (int i = 0; i < cfg.relocalisation_recent && i < int(keyframes.size()); ++i) add(keyframes[keyframes.size() - 1 - i]);
+    return out;
+  }
+
+  /// Registers a lost frame against candidate keyframes (A3) with the wide-baseline effort; only
+  /// a feature-supported registration with enough overlap counts (there is no prior to check).
   bool relocalise(const FrameFeatures& features, const std::vector<DepthLevel>& frame_pyramid,
                   const FernCode& code, Registration& out) {
-    std::vector<std::pair<double, std::shared_ptr<const Keyframe>>> candidates;
-    {
-      std::lock_guard<std::mutex> lock(mutex);
-      const auto sims = ferns.similarities(code);
-      for (size_t i = 0; i < sims.size(); ++i) candidates.emplace_back(sims[i], keyframes[ferns.ids()[i]]);
-    }
-    std::stable_sort(candidates.begin(), candidates.end(),
-                     [](const auto& a, const auto& b) { return a.first > b.first; });
-    if (int(candidates.size()) > cfg.relocalisation_candidates) candidates.resize(cfg.relocalisation_candidates);
-    for (const auto& [sim, kf] : candidates) {
+    if (int(features.points.size()) < cfg.ransac_trusted_inliers) return false;  // blank / textureless frame
+    for (const auto& kf : relocalisation_candidates(code)) {
       auto kf_pyramid = kf->id == reference ? ref_pyramid : pyramid(kf->depth, kf->gray);
       Registration reg = register_to(features, frame_pyramid, kf->features, kf_pyramid, nullptr,
-                                     uint32_t(cfg.seed) + 104729u * uint32_t(kf->id + 1));
-      // Without a prior only a clear registration counts (repetitive texture fools RANSAC).
-      if (!reg.ok || reg.icp.overlap < cfg.keyframe_min_overlap) continue;
+                                     uint32_t(cfg.seed) + 104729u * uint32_t(kf->id + 1), Effort::wide);
+      if (!reg.accepted || reg.icp.overlap < cfg.relocalisation_min_overlap) continue;
       out = reg;
       reference = kf->id;
       ref_pyramid = std::move(kf_pyramid);

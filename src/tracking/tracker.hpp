@@ -39,6 +39,9 @@ struct TrackResult {
   double icp_overlap = 0.0;                ///< matched fraction of the frame's points
   cv::Mat depth;                           ///< depth used for tracking (repaired when enabled), CV_32FC1 metres
   TrackTimings timings;
+  /// The pose passed its checks (tracked or relocalised); a frame without a verified pose must
+  /// not be integrated (the Mapper skips it).
+  bool pose_verified() const { return status != TrackingStatus::lost; }
 };
 
 struct KeyframeInfo {

@@ -2,6 +2,7 @@
 // The one pinhole camera model of the project. Depth images inside the program are float
 // metres; the raw 16-bit scale lives here only so io/ can convert.
 #include <Eigen/Core>
+#include <array>
 #include <optional>
 #include <string>
 
@@ -34,6 +35,14 @@ struct CameraModel {
   PinholeIntrinsics depth;
   /// Raw depth units per metre (TUM: 5000, 7-Scenes: 1000, YCB: 10000).
   double depth_scale = 5000.0;
+  /// Lens distortion of the depth (= registered colour) image, OpenCV order k1 k2 p1 p2 k3;
+  /// all zero = none. Only tracking undistorts with it (issue 16: TUM fr1's strong distortion).
+  std::array<double, 5> distortion = {0, 0, 0, 0, 0};
+  bool has_distortion() const {
+    for (double d : distortion)
+      if (d != 0) return true;
+    return false;
+  }
 
   struct ColourCamera {
     PinholeIntrinsics intrinsics;

@@ -1,9 +1,59 @@
 #pragma once
+#include <algorithm>
+
 #include "semap/core/params.hpp"
 
 namespace semap {
 
-/// Parameters of tracking (METHODS.md A1-A4). Every tunable of src/tracking lives here.
+/// Point-to-plane ICP with projective association, coarse to fine (METHODS.md A2 step 4):
+/// the section `tracking.icp`. registration.hpp's icp_point_to_plane() takes it as it is.
+struct IcpParams {
+  int levels = 3;                  ///< pyramid levels (level 0 = full resolution)
+  int iterations_fine = 4;         ///< Gauss-Newton iterations at level 0
+  int iterations_mid = 6;          ///< at level 1
+  int iterations_coarse = 10;      ///< at levels >= 2
+  int stride = 4;                  ///< source pixel step at level 0, halved per level up
+  int min_stride = 2;              ///< the halved step never goes below this at levels >= 1 (2: a quarter of the coarsest level's pixels, same ATE)
+  double max_distance = 0.10;      ///< correspondence gate at level 0, metres (x2 per level up)
+  double max_normal_angle_deg = 35.0;  ///< normal compatibility gate, degrees
+  double huber_delta = 0.01;       ///< Huber threshold of the point-to-plane residual, metres
+  double convergence_update = 5e-4;  ///< stop level 0 when |update| falls below (rad, m); the Huber/association noise floor is 3-7e-4 (1e-3 loses 0.5 cm on fr1_rpy)
+  double convergence_level_scale = 2.0;  ///< level l stops below convergence_update * scale^l (coarse pixels resolve less)
+  double converged_update = 2e-3;  ///< last update above this = ICP not converged (tracking loss), (rad, m)
+  /// Photometric term (joint geometric + photometric ICP as in ElasticFusion / Open3D's hybrid
+  /// odometry): weight of the squared intensity residual relative to the squared point-to-plane
+  /// residual in metres, (sigma_geo / sigma_I)^2 with sigma_geo ~ 1 cm, sigma_I ~ 5 grey levels.
+  /// 0 = geometry only.
+  double photometric_weight = 0.3;
+  double photometric_huber = 0.1;  ///< Huber threshold of the intensity residual (intensity 0..1)
+  double photometric_max_depth_difference = 0.05;  ///< occlusion test of the photometric term, metres
+  bool photometric_bias = false;   ///< estimate a brightness offset between frame and keyframe (auto exposure)
+
+  /// Gauss-Newton iterations at pyramid level l.
+  int iterations_at(int l) const { return l == 0 ? iterations_fine : l == 1 ? iterations_mid : iterations_coarse; }
+
+  void visit(ParamVisitor& v) {
+    v.param("levels", levels, "", "ICP pyramid levels (coarse to fine)", {1, 5});
+    v.param("iterations_fine", iterations_fine, "", "ICP iterations at full resolution", {0, 100});
+    v.param("iterations_mid", iterations_mid, "", "ICP iterations at half resolution", {0, 100});
+    v.param("iterations_coarse", iterations_coarse, "", "ICP iterations at coarser levels", {0, 100});
+    v.param("stride", stride, "px", "source pixel step at full resolution", {1, 8});
+    v.param("min_stride", min_stride, "px", "smallest source pixel step at the coarser levels", {1, 8});
+    v.param("max_distance", max_distance, "m", "correspondence gate at full resolution (doubles per level)", positive(2.0));
+    v.param("max_normal_angle_deg", max_normal_angle_deg, "deg", "normal compatibility gate", {0.0, 90.0, true});
+    v.param("huber_delta", huber_delta, "m", "Huber threshold on point-to-plane residuals", positive(1.0));
+    v.param("convergence_update", convergence_update, "rad|m", "update norm that ends a level", positive(1.0));
+    v.param("convergence_level_scale", convergence_level_scale, "", "stop threshold factor per pyramid level up", {1.0, 10.0});
+    v.param("converged_update", converged_update, "rad|m", "final update above this = ICP not converged", positive(1.0));
+    v.param("photometric_weight", photometric_weight, "m^2", "joint ICP: weight of intensity residuals vs point-to-plane residuals (0 = off)", non_negative(100.0));
+    v.param("photometric_huber", photometric_huber, "", "Huber threshold of intensity residuals (0..1)", positive(1.0));
+    v.param("photometric_max_depth_difference", photometric_max_depth_difference, "m", "photometric residuals need the target depth this close", positive(1.0));
+    v.param("photometric_bias", photometric_bias, "", "estimate a brightness offset (auto exposure) in the photometric term");
+  }
+};
+
+/// Parameters of tracking (METHODS.md A1-A4). Every tunable of src/tracking lives here (the
+/// ICP in its section `icp`); ranges are declared once in visit(), validate() derives from them.
 struct TrackingConfig {
   // --- A1 depth repair (joint median filter) ---
   bool depth_repair = true;            ///< fill invalid depth pixels (valid ones never change)
@@ -24,38 +74,38 @@ struct TrackingConfig {
   int match_max_hamming = 64;          ///< matches with a larger Hamming distance are dropped, bits
   int ransac_iterations = 200;         ///< 3-point samples per RANSAC
   double ransac_inlier_distance = 0.04;  ///< vote threshold on 3D point distance, metres
-  int ransac_min_inliers = 15;         ///< fewer inliers -> feature estimate not trusted
+  int ransac_min_inliers = 15;         ///< fewer inliers -> feature estimate not used
+  /// A feature estimate this well supported is trusted even where it disagrees with the
+  /// constant-velocity prior (wide baselines, sudden motion, issue 16): inlier count ...
+  int ransac_trusted_inliers = 40;
+  double ransac_trusted_ratio = 0.3;   ///< ... and inliers / matches
+  double ransac_icp_agreement = 0.05;  ///< ICP refined within this of the RANSAC estimate (metres; radians / 0.5 m lever) to keep its support
+  int wide_ransac_iterations = 1000;   ///< RANSAC samples of the wide-baseline attempt (only when the prior failed)
   int seed = 1;                        ///< RANSAC / ferns random seed (deterministic)
 
-  // --- A2 point-to-plane ICP (projective association, coarse to fine) ---
-  int icp_levels = 3;                  ///< pyramid levels (level 0 = full resolution)
-  int icp_iterations_fine = 4;         ///< Gauss-Newton iterations at level 0
-  int icp_iterations_mid = 6;          ///< at level 1
-  int icp_iterations_coarse = 10;      ///< at levels >= 2
-  int icp_stride = 4;                  ///< pixel step over the source image at level 0 (halved per level)
-  int icp_min_stride = 2;              ///< the halved step never goes below this at levels >= 1 (2: a quarter of the coarsest level's pixels, same ATE, METHODS.md A2)
-  double icp_max_distance = 0.10;      ///< correspondence distance gate at level 0, metres (x2 per level up)
-  double icp_max_normal_angle_deg = 35.0;  ///< normal compatibility gate, degrees
-  double icp_huber_delta = 0.01;       ///< Huber threshold of the point-to-plane residual, metres
-  double icp_convergence_update = 5e-4;  ///< stop level 0 when |update| falls below (rad, m); the Huber/association noise floor is 3-7e-4, 1e-5 only ran iterations to the cap (same ATE; 1e-3 loses 0.5 cm on fr1_rpy)
-  double icp_convergence_level_scale = 2.0;  ///< level l stops below icp_convergence_update * scale^l (coarse pixels resolve less)
-  double icp_converged_update = 2e-3;  ///< last update above this = ICP not converged (tracking loss), (rad, m)
-  double icp_photometric_weight = 0.3;  ///< weight of the intensity residual against the point-to-plane one, m^2 (0 = geometry only): (sigma_geo / sigma_I)^2 with sigma_geo ~ 1 cm, sigma_I ~ 5 grey levels
-  double icp_photometric_huber = 0.1;   ///< Huber threshold of the intensity residual (intensity 0..1)
-  double icp_photometric_max_depth_difference = 0.05;  ///< occlusion test of the photometric term, metres
-  bool icp_photometric_bias = false;    ///< estimate a brightness offset between frame and keyframe (auto exposure)
+  // --- A2 ICP ---
+  IcpParams icp;
+  /// Wide-baseline attempt: the correspondence gate grows with the motion the start pose may
+  /// be off by (RANSAC inlier spread, or the prior's step), gate = max(icp.max_distance,
+  /// this * expected error).
+  double wide_icp_gate_factor = 2.0;
+  double wide_icp_max_distance = 0.3;  ///< upper bound of that level-0 gate, metres
 
   // --- tracking loss (A2) ---
   double loss_max_icp_rmse = 0.03;     ///< ICP residual RMSE above this = lost, metres
   double loss_min_overlap = 0.20;      ///< fewer than this fraction of source points matched = lost
-  double loss_max_translation_jump = 0.30;  ///< jump from the motion prior above this = lost, metres
-  double loss_max_rotation_jump_deg = 30.0; ///< jump from the motion prior above this = lost, degrees
+  double loss_max_translation_jump = 0.30;  ///< without trusted feature support: a jump from the motion prior above this = lost, metres
+  double loss_max_rotation_jump_deg = 30.0; ///< same for rotation, degrees
   int relocalisation_candidates = 3;   ///< keyframes (by fern similarity) tried when lost
+  int relocalisation_recent = 2;       ///< plus this many most recent keyframes
+  double relocalisation_min_overlap = 0.4;  ///< ICP overlap a relocalisation needs (no prior to check it against)
 
   // --- keyframes ---
   double keyframe_translation = 0.12;  ///< motion from the reference keyframe that makes a new one, metres
   double keyframe_rotation_deg = 12.0; ///< same for rotation, degrees
   double keyframe_min_overlap = 0.5;  ///< ICP overlap below this makes a new keyframe (fraction)
+  double keyframe_max_icp_rmse = 0.02;   ///< ICP RMSE above this makes a new keyframe (before it reaches the loss limit), metres
+  int keyframe_min_inliers = 30;       ///< fewer RANSAC inliers make a new keyframe (features thinning out)
   bool keyframe_reuse = true;          ///< track against an older keyframe near the current pose instead of making a new one
   double keyframe_reuse_max_score = 0.8;  ///< max (dt/keyframe_translation + drot/keyframe_rotation) for reuse
 
@@ -83,100 +133,65 @@ struct TrackingConfig {
 
   void visit(ParamVisitor& v) {
     v.param("depth_repair", depth_repair, "", "fill invalid depth with the joint median filter (A1)");
-    v.param("depth_repair_radius", depth_repair_radius, "px", "joint median window radius r (A1)");
-    v.param("depth_repair_gray_threshold", depth_repair_gray_threshold, "grey levels", "t_gray: neighbours whose grey differs more are ignored (A1)");
-    v.param("depth_repair_min_support", depth_repair_min_support, "px", "minimum same-grey valid neighbours to fill a pixel");
-    v.param("min_depth", min_depth, "m", "nearer depth is ignored by tracking");
-    v.param("max_depth", max_depth, "m", "farther depth is ignored by tracking");
-    v.param("orb_features", orb_features, "", "ORB keypoints per frame (A2)");
-    v.param("orb_levels", orb_levels, "", "ORB pyramid levels");
-    v.param("orb_scale_factor", orb_scale_factor, "", "ORB pyramid scale step");
-    v.param("orb_fast_threshold", orb_fast_threshold, "grey levels", "FAST corner threshold");
-    v.param("match_ratio", match_ratio, "", "ratio test on Hamming distances (best/second)");
-    v.param("match_max_hamming", match_max_hamming, "bits", "matches farther than this are dropped");
-    v.param("ransac_iterations", ransac_iterations, "", "voting RANSAC samples (A2)");
-    v.param("ransac_inlier_distance", ransac_inlier_distance, "m", "3D distance under which a match votes");
-    v.param("ransac_min_inliers", ransac_min_inliers, "", "fewer inliers: use the motion prior instead");
+    v.param("depth_repair_radius", depth_repair_radius, "px", "joint median window radius r (A1)", {1, 15});
+    v.param("depth_repair_gray_threshold", depth_repair_gray_threshold, "grey levels", "t_gray: neighbours whose grey differs more are ignored (A1)", non_negative(255.0));
+    v.param("depth_repair_min_support", depth_repair_min_support, "px", "minimum same-grey valid neighbours to fill a pixel", {1, 961});
+    v.param("min_depth", min_depth, "m", "nearer depth is ignored by tracking", non_negative(100.0));
+    v.param("max_depth", max_depth, "m", "farther depth is ignored by tracking", positive(100.0));
+    v.param("orb_features", orb_features, "", "ORB keypoints per frame (A2)", {10, 100000});
+    v.param("orb_levels", orb_levels, "", "ORB pyramid levels", {1, 12});
+    v.param("orb_scale_factor", orb_scale_factor, "", "ORB pyramid scale step", {1.0, 4.0, true});
+    v.param("orb_fast_threshold", orb_fast_threshold, "grey levels", "FAST corner threshold", {1, 255});
+    v.param("match_ratio", match_ratio, "", "ratio test on Hamming distances (best/second)", {0.0, 1.0, true});
+    v.param("match_max_hamming", match_max_hamming, "bits", "matches farther than this are dropped", {0, 256});
+    v.param("ransac_iterations", ransac_iterations, "", "voting RANSAC samples (A2)", {1, 1000000});
+    v.param("ransac_inlier_distance", ransac_inlier_distance, "m", "3D distance under which a match votes", positive(1.0));
+    v.param("ransac_min_inliers", ransac_min_inliers, "", "fewer inliers: the feature estimate is not used", {3, 100000});
+    v.param("ransac_trusted_inliers", ransac_trusted_inliers, "", "this many inliers (and the ratio) make the feature estimate trusted against the motion prior", {3, 100000});
+    v.param("ransac_trusted_ratio", ransac_trusted_ratio, "", "inliers / matches a trusted feature estimate needs", fraction());
+    v.param("ransac_icp_agreement", ransac_icp_agreement, "m", "ICP must stay this close to the RANSAC estimate to keep its support (rotation: rad x 0.5 m)", positive(1.0));
+    v.param("wide_ransac_iterations", wide_ransac_iterations, "", "RANSAC samples when the motion prior failed", {1, 1000000});
     v.param("seed", seed, "", "random seed for RANSAC and ferns");
-    v.param("icp_levels", icp_levels, "", "ICP pyramid levels (coarse to fine)");
-    v.param("icp_iterations_fine", icp_iterations_fine, "", "ICP iterations at full resolution");
-    v.param("icp_iterations_mid", icp_iterations_mid, "", "ICP iterations at half resolution");
-    v.param("icp_iterations_coarse", icp_iterations_coarse, "", "ICP iterations at coarser levels");
-    v.param("icp_stride", icp_stride, "px", "source pixel step at full resolution");
-    v.param("icp_min_stride", icp_min_stride, "px", "smallest source pixel step at the coarser levels");
-    v.param("icp_max_distance", icp_max_distance, "m", "correspondence gate at full resolution (doubles per level)");
-    v.param("icp_max_normal_angle_deg", icp_max_normal_angle_deg, "deg", "normal compatibility gate");
-    v.param("icp_huber_delta", icp_huber_delta, "m", "Huber threshold on point-to-plane residuals");
-    v.param("icp_convergence_update", icp_convergence_update, "rad|m", "update norm that ends a level");
-    v.param("icp_convergence_level_scale", icp_convergence_level_scale, "", "stop threshold factor per pyramid level up");
-    v.param("icp_converged_update", icp_converged_update, "rad|m", "final update above this = ICP not converged");
-    v.param("icp_photometric_weight", icp_photometric_weight, "m^2", "joint ICP: weight of intensity residuals vs point-to-plane residuals (0 = off)");
-    v.param("icp_photometric_huber", icp_photometric_huber, "", "Huber threshold of intensity residuals (0..1)");
-    v.param("icp_photometric_max_depth_difference", icp_photometric_max_depth_difference, "m", "photometric residuals need the target depth this close");
-    v.param("icp_photometric_bias", icp_photometric_bias, "", "estimate a brightness offset (auto exposure) in the photometric term");
-    v.param("loss_max_icp_rmse", loss_max_icp_rmse, "m", "ICP RMSE above this means tracking is lost");
-    v.param("loss_min_overlap", loss_min_overlap, "", "matched fraction below this means lost");
-    v.param("loss_max_translation_jump", loss_max_translation_jump, "m", "implausible jump from the motion prior");
-    v.param("loss_max_rotation_jump_deg", loss_max_rotation_jump_deg, "deg", "implausible rotation jump");
-    v.param("relocalisation_candidates", relocalisation_candidates, "", "keyframes tried when relocalising");
-    v.param("keyframe_translation", keyframe_translation, "m", "translation that makes a new keyframe");
-    v.param("keyframe_rotation_deg", keyframe_rotation_deg, "deg", "rotation that makes a new keyframe");
-    v.param("keyframe_min_overlap", keyframe_min_overlap, "", "ICP overlap below this makes a new keyframe");
+    v.section("icp", "point-to-plane + photometric ICP, coarse to fine (A2 step 4)", [&](ParamVisitor& s) { icp.visit(s); });
+    v.param("wide_icp_gate_factor", wide_icp_gate_factor, "", "wide-baseline ICP gate = this x the start pose's expected error", positive(20.0));
+    v.param("wide_icp_max_distance", wide_icp_max_distance, "m", "upper bound of the wide-baseline level-0 gate", positive(2.0));
+    v.param("loss_max_icp_rmse", loss_max_icp_rmse, "m", "ICP RMSE above this means tracking is lost", positive(1.0));
+    v.param("loss_min_overlap", loss_min_overlap, "", "matched fraction below this means lost", {0.0, 1.0});
+    v.param("loss_max_translation_jump", loss_max_translation_jump, "m", "jump from the motion prior that an estimate without trusted features may not make", positive(100.0));
+    v.param("loss_max_rotation_jump_deg", loss_max_rotation_jump_deg, "deg", "same for rotation", positive(180.0));
+    v.param("relocalisation_candidates", relocalisation_candidates, "", "keyframes (by fern similarity) tried when relocalising", {0, 1000});
+    v.param("relocalisation_recent", relocalisation_recent, "", "most recent keyframes also tried when relocalising", {0, 1000});
+    v.param("relocalisation_min_overlap", relocalisation_min_overlap, "", "ICP overlap a relocalisation needs", fraction());
+    v.param("keyframe_translation", keyframe_translation, "m", "translation that makes a new keyframe", positive(100.0));
+    v.param("keyframe_rotation_deg", keyframe_rotation_deg, "deg", "rotation that makes a new keyframe", positive(180.0));
+    v.param("keyframe_min_overlap", keyframe_min_overlap, "", "ICP overlap below this makes a new keyframe", fraction());
+    v.param("keyframe_max_icp_rmse", keyframe_max_icp_rmse, "m", "ICP RMSE above this makes a new keyframe", positive(1.0));
+    v.param("keyframe_min_inliers", keyframe_min_inliers, "", "fewer RANSAC inliers make a new keyframe", {0, 100000});
     v.param("keyframe_reuse", keyframe_reuse, "", "re-use an older keyframe near the current pose");
-    v.param("keyframe_reuse_max_score", keyframe_reuse_max_score, "", "pose-distance score limit for re-use");
-    v.param("fern_count", fern_count, "", "m random ferns (A3)");
-    v.param("fern_tests", fern_tests, "", "n binary tests per fern (code has 2^n values)");
-    v.param("fern_width", fern_width, "px", "encoding image width");
-    v.param("fern_height", fern_height, "px", "encoding image height");
-    v.param("fern_new_keyframe_similarity", fern_new_keyframe_similarity, "", "dissimilar frames become keyframes");
-    v.param("loop_min_similarity", loop_min_similarity, "", "fern similarity of a loop candidate");
-    v.param("loop_min_keyframe_gap", loop_min_keyframe_gap, "keyframes", "loop candidates are at least this old");
-    v.param("loop_candidates", loop_candidates, "", "candidates verified per keyframe");
-    v.param("loop_max_icp_rmse", loop_max_icp_rmse, "m", "loop verification ICP RMSE limit");
-    v.param("loop_min_overlap", loop_min_overlap, "", "loop verification overlap limit");
-    v.param("loop_max_pose_disagreement", loop_max_pose_disagreement, "m", "largest accepted loop correction");
+    v.param("keyframe_reuse_max_score", keyframe_reuse_max_score, "", "pose-distance score limit for re-use", non_negative(100.0));
+    v.param("fern_count", fern_count, "", "m random ferns (A3)", {1, 10000});
+    v.param("fern_tests", fern_tests, "", "n binary tests per fern (code has 2^n values)", {1, 12});
+    v.param("fern_width", fern_width, "px", "encoding image width", {8, 4096});
+    v.param("fern_height", fern_height, "px", "encoding image height", {8, 4096});
+    v.param("fern_new_keyframe_similarity", fern_new_keyframe_similarity, "", "dissimilar frames become keyframes", fraction());
+    v.param("loop_min_similarity", loop_min_similarity, "", "fern similarity of a loop candidate", fraction());
+    v.param("loop_min_keyframe_gap", loop_min_keyframe_gap, "keyframes", "loop candidates are at least this old", {1, 1000000});
+    v.param("loop_candidates", loop_candidates, "", "candidates verified per keyframe", {0, 1000});
+    v.param("loop_max_icp_rmse", loop_max_icp_rmse, "m", "loop verification ICP RMSE limit", positive(1.0));
+    v.param("loop_min_overlap", loop_min_overlap, "", "loop verification overlap limit", fraction());
+    v.param("loop_max_pose_disagreement", loop_max_pose_disagreement, "m", "largest accepted loop correction", positive(100.0));
     v.param("pose_graph", pose_graph, "", "optimise keyframe poses with Ceres (A4)");
-    v.param("pose_graph_iterations", pose_graph_iterations, "", "Ceres iterations per optimisation");
-    v.param("pose_graph_loop_huber", pose_graph_loop_huber, "", "Huber scale on loop edges (whitened)");
-    v.param("information_effective_points", information_effective_points, "", "independent points assumed for edge information");
-    v.param("information_min_sigma", information_min_sigma, "m", "noise floor for edge information");
+    v.param("pose_graph_iterations", pose_graph_iterations, "", "Ceres iterations per optimisation", {1, 10000});
+    v.param("pose_graph_loop_huber", pose_graph_loop_huber, "", "Huber scale on loop edges (whitened)", positive(1000.0));
+    v.param("information_effective_points", information_effective_points, "", "independent points assumed for edge information", positive(1e9));
+    v.param("information_min_sigma", information_min_sigma, "m", "noise floor for edge information", positive(1.0));
     v.param("background_loop_closure", background_loop_closure, "", "loop closure on a worker thread (false = deterministic)");
     v.param("parallel", parallel, "", "row-parallel loops inside tracking (false = serial, less CPU per frame)");
   }
   void validate() const {
-    require_param(depth_repair_radius >= 1 && depth_repair_radius <= 15, "tracking.depth_repair_radius", "must be in [1, 15]");
-    require_param(depth_repair_gray_threshold >= 0, "tracking.depth_repair_gray_threshold", "must be >= 0");
-    require_param(depth_repair_min_support >= 1, "tracking.depth_repair_min_support", "must be >= 1");
-    require_param(min_depth >= 0 && max_depth > min_depth, "tracking.max_depth", "need 0 <= min_depth < max_depth");
-    require_param(orb_features >= 10, "tracking.orb_features", "must be >= 10");
-    require_param(orb_levels >= 1 && orb_levels <= 12, "tracking.orb_levels", "must be in [1, 12]");
-    require_param(orb_scale_factor > 1.0, "tracking.orb_scale_factor", "must be > 1");
-    require_param(match_ratio > 0 && match_ratio <= 1, "tracking.match_ratio", "must be in (0, 1]");
-    require_param(ransac_iterations >= 1, "tracking.ransac_iterations", "must be >= 1");
-    require_param(ransac_inlier_distance > 0, "tracking.ransac_inlier_distance", "must be > 0");
-    require_param(ransac_min_inliers >= 3, "tracking.ransac_min_inliers", "must be >= 3");
-    require_param(icp_levels >= 1 && icp_levels <= 5, "tracking.icp_levels", "must be in [1, 5]");
-    require_param(icp_iterations_fine >= 0 && icp_iterations_mid >= 0 && icp_iterations_coarse >= 0,
-                  "tracking.icp_iterations_fine", "iterations must be >= 0");
-    require_param(icp_stride >= 1 && icp_stride <= 8, "tracking.icp_stride", "must be in [1, 8]");
-    require_param(icp_min_stride >= 1 && icp_min_stride <= 8, "tracking.icp_min_stride", "must be in [1, 8]");
-    require_param(icp_max_distance > 0, "tracking.icp_max_distance", "must be > 0");
-    require_param(icp_max_normal_angle_deg > 0 && icp_max_normal_angle_deg <= 90, "tracking.icp_max_normal_angle_deg", "must be in (0, 90]");
-    require_param(icp_convergence_level_scale >= 1, "tracking.icp_convergence_level_scale", "must be >= 1");
-    require_param(icp_huber_delta > 0, "tracking.icp_huber_delta", "must be > 0");
-    require_param(icp_photometric_weight >= 0, "tracking.icp_photometric_weight", "must be >= 0");
-    require_param(icp_photometric_huber > 0, "tracking.icp_photometric_huber", "must be > 0");
-    require_param(icp_photometric_max_depth_difference > 0, "tracking.icp_photometric_max_depth_difference", "must be > 0");
-    require_param(loss_max_icp_rmse > 0, "tracking.loss_max_icp_rmse", "must be > 0");
-    require_param(loss_min_overlap >= 0 && loss_min_overlap < 1, "tracking.loss_min_overlap", "must be in [0, 1)");
-    require_param(keyframe_translation > 0 && keyframe_rotation_deg > 0, "tracking.keyframe_translation", "keyframe thresholds must be > 0");
-    require_param(fern_count >= 1 && fern_count <= 10000, "tracking.fern_count", "must be in [1, 10000]");
-    require_param(fern_tests >= 1 && fern_tests <= 12, "tracking.fern_tests", "must be in [1, 12]");
-    require_param(fern_width >= 8 && fern_height >= 8, "tracking.fern_width", "encoding must be at least 8x8");
-    require_param(loop_min_keyframe_gap >= 1, "tracking.loop_min_keyframe_gap", "must be >= 1");
-    require_param(pose_graph_iterations >= 1, "tracking.pose_graph_iterations", "must be >= 1");
-    require_param(information_effective_points > 0, "tracking.information_effective_points", "must be > 0");
-    require_param(information_min_sigma > 0, "tracking.information_min_sigma", "must be > 0");
+    check_param_ranges(*this, "tracking");
+    require_param(max_depth > min_depth, "tracking.max_depth", "need min_depth < max_depth");
+    require_param(ransac_trusted_inliers >= ransac_min_inliers, "tracking.ransac_trusted_inliers", "must be >= ransac_min_inliers");
   }
 };
 
