@@ -215,6 +215,7 @@ void ObjectMap::associate(const std::vector<ObjectSegment>& segments, size_t fra
       created.id = next_id_++;
       created.score_sum.assign(kNumClasses, 0.0);
       created.first_frame = frame_index;
+      created.first_step = step;
       created.association_count = 1;
       created.total_associations = 1;
       // The new instance was co-candidate with every candidate of its creating segment (C5).
@@ -292,6 +293,7 @@ void ObjectMap::merge_into(ObjectInstance& target, ObjectInstance& source) {
   target.first_frame = std::min(target.first_frame, source.first_frame);
   target.last_frame = std::max(target.last_frame, source.last_frame);
   target.last_step = std::max(target.last_step, source.last_step);
+  target.first_step = std::min(target.first_step, source.first_step);
   for (const auto& [id, count] : source.co_association)
     if (id != target.id) target.co_association[id] = std::max(target.co_association[id], count);
   target.co_association.erase(source.id);
@@ -322,12 +324,12 @@ void ObjectMap::absorb_fragment(size_t i, const std::vector<char>& remove, Optim
 
 void ObjectMap::promote_or_delete(size_t step, bool ignore_recency, std::vector<char>& remove,
                                   OptimisationStats& stats) {
-  // T of the deletion rule s_i + n_i < T/10 (METHODS C5) is the window this pass looks back
-  // on: optimise_every frames for the periodic passes, fewer for the final pass of a run that
-  // ended between two (10 frames cannot give an instance the counts 50 frames would).
-  const double T = static_cast<double>(std::min<size_t>(step - last_optimisation_step_, config_.optimise_every));
   for (size_t i = 0; i < instances_.size(); ++i) {
     auto& inst = instances_[i];
+    // T of the deletion rule s_i + n_i < T/10 (METHODS C5): the optimisation period, or the
+    // steps the instance has existed when fewer (the final pass of a 10-frame run cannot ask
+    // an instance for the counts 50 frames would give).
+    const double T = static_cast<double>(std::min<size_t>(step - inst.first_step + 1, config_.optimise_every));
     if (inst.state == InstanceState::kStable) continue;
     const bool recent = !ignore_recency && step - inst.last_step <= static_cast<size_t>(config_.recent_frames);
     if (inst.association_count >= config_.stable_min_associations) {
@@ -393,7 +395,6 @@ OptimisationStats ObjectMap::optimise(size_t step, bool ignore_recency) {
   stats.before = instances_.size();
   std::vector<char> remove(instances_.size(), 0);
   promote_or_delete(step, ignore_recency, remove, stats);  // NEW / UNSTABLE (C5)
-  last_optimisation_step_ = step;
   stats.after_delete = stats.before - static_cast<size_t>(stats.deleted);
   if (config_.enable_merge) merge_stable_pairs(remove, stats);  // STABLE pairs (C5)
   stats.after_merge = stats.after_delete - static_cast<size_t>(stats.merged);

@@ -36,6 +36,7 @@ struct ObjectInstance {
   int total_associations = 0;         ///< s_i over the whole run (reporting)
   std::unordered_map<uint32_t, int> co_association;  ///< co-candidacy with other ids since the last optimisation
   size_t first_frame = 0, last_frame = 0;  ///< frame indices (reporting)
+  size_t first_step = 0;              ///< process() call that created it (C5's window T)
   size_t last_step = 0;               ///< process() call that last merged a segment (recency)
   InstanceState state = InstanceState::kNew;
   bool changed = true;                ///< merge count changed since the last optimisation
@@ -127,7 +128,6 @@ class ObjectMap {
   ObjectsConfig config_;
   std::vector<ObjectInstance> instances_;
   uint32_t next_id_ = 1;
-  size_t last_optimisation_step_ = 0;  ///< step of the previous optimise() (C5's window T)
 };
 
 }  // namespace semap

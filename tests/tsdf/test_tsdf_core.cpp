@@ -272,7 +272,7 @@ TEST(TsdfMap, RemoveKeepsLookupsConsistent) {
   TsdfMap map(cfg);
   for (int i = 0; i < 100; ++i) map.allocate_block(BlockIndex(i, -i, i % 7));
   EXPECT_EQ(map.num_blocks(), 100u);
-  EXPECT_EQ(map.bytes_per_voxel(), 4u + 1u + 8u);  // core 4 + vote 1 + Bayesian top-4 (2 bytes each), the defaults
+  EXPECT_EQ(map.bytes_per_voxel(), 4u + 1u + 8u + 3u);  // core 4 + vote 1 + Bayesian top-4 (2 bytes each) + RGB 3, the defaults
   size_t far = 0;
   for (int i = 0; i < 100; ++i) {
     const Eigen::Vector3f c = (Eigen::Vector3f(i, -i, i % 7) * 0.16f).array() + 0.08f;
