@@ -131,6 +131,17 @@ TEST(ObjectsScores, JensenShannonValues) {
 }
 
 namespace {
+
+/// `s` with grey colours and class `cls` at full confidence.
+ObjectSegment certain_segment(ObjectSegment s, ClassId cls) {
+  s.colours.assign(s.points.size(), Rgb8{});
+  s.class_id = cls;
+  s.score = 1.f;
+  s.class_scores.assign(kNumClasses, 0.0);
+  s.class_scores[cls] = 1.0;
+  return s;
+}
+
 ObjectSegment cube_segment(const Eigen::Vector3f& corner, float size, ClassId cls, float step = 0.01f) {
   ObjectSegment s;
   for (float x = 0; x < size; x += step)
@@ -138,12 +149,7 @@ ObjectSegment cube_segment(const Eigen::Vector3f& corner, float size, ClassId cl
       for (float z = 0; z < size; z += step)
         if (x == 0 || y == 0 || z == 0 || x + step >= size || y + step >= size || z + step >= size)
           s.points.push_back(corner + Eigen::Vector3f(x, y, z));
-  s.colours.assign(s.points.size(), Rgb8{});
-  s.class_id = cls;
-  s.score = 1.f;
-  s.class_scores.assign(kNumClasses, 0.0);
-  s.class_scores[cls] = 1.0;
-  return s;
+  return certain_segment(std::move(s), cls);
 }
 ObjectsConfig toy_config() {
   ObjectsConfig c;
@@ -511,12 +517,7 @@ TEST(ObjectsMap, MergeOfViewsFromOppositeSidesByContainment) {
       for (float z = z0; z < z1; z += 0.01f) s.points.emplace_back(x, y, z);
     for (float xx = 0; xx < 0.4f; xx += 0.01f)
       for (float y = 0; y < 0.4f; y += 0.01f) s.points.emplace_back(xx, y, 0.45f);  // seat
-    s.colours.assign(s.points.size(), Rgb8{});
-    s.class_id = cls;
-    s.score = 1.f;
-    s.class_scores.assign(kNumClasses, 0.0);
-    s.class_scores[cls] = 1.0;
-    return s;
+    return certain_segment(std::move(s), cls);
   };
   const ClassId chair = id(Label::kChair);
   for (const double ratio : {0.5, 1.0}) {
