@@ -215,7 +215,6 @@ void ObjectMap::associate(const std::vector<ObjectSegment>& segments, size_t fra
       created.id = next_id_++;
       created.score_sum.assign(kNumClasses, 0.0);
       created.first_frame = frame_index;
-      created.first_step = step;
       created.association_count = 1;
       created.total_associations = 1;
       // The new instance was co-candidate with every candidate of its creating segment (C5).
@@ -293,7 +292,6 @@ void ObjectMap::merge_into(ObjectInstance& target, ObjectInstance& source) {
   target.first_frame = std::min(target.first_frame, source.first_frame);
   target.last_frame = std::max(target.last_frame, source.last_frame);
   target.last_step = std::max(target.last_step, source.last_step);
-  target.first_step = std::min(target.first_step, source.first_step);
   for (const auto& [id, count] : source.co_association)
     if (id != target.id) target.co_association[id] = std::max(target.co_association[id], count);
   target.co_association.erase(source.id);
@@ -324,12 +322,12 @@ void ObjectMap::absorb_fragment(size_t i, const std::vector<char>& remove, Optim
 
 void ObjectMap::promote_or_delete(size_t step, bool ignore_recency, std::vector<char>& remove,
                                   OptimisationStats& stats) {
+  // T of the deletion rule s_i + n_i < T/10 (METHODS C5): the optimisation period, or the whole
+  // run when it is shorter (the final pass of a run of 2 object frames cannot ask an instance
+  // for the counts 50 frames would give; a late fragment of a long run still goes).
+  const double T = static_cast<double>(std::min<size_t>(step, config_.optimise_every));
   for (size_t i = 0; i < instances_.size(); ++i) {
     auto& inst = instances_[i];
-    // T of the deletion rule s_i + n_i < T/10 (METHODS C5): the optimisation period, or the
-    // steps the instance has existed when fewer (the final pass of a 10-frame run cannot ask
-    // an instance for the counts 50 frames would give).
-    const double T = static_cast<double>(std::min<size_t>(step - inst.first_step + 1, config_.optimise_every));
     if (inst.state == InstanceState::kStable) continue;
     const bool recent = !ignore_recency && step - inst.last_step <= static_cast<size_t>(config_.recent_frames);
     if (inst.association_count >= config_.stable_min_associations) {

@@ -36,7 +36,6 @@ struct ObjectInstance {
   int total_associations = 0;         ///< s_i over the whole run (reporting)
   std::unordered_map<uint32_t, int> co_association;  ///< co-candidacy with other ids since the last optimisation
   size_t first_frame = 0, last_frame = 0;  ///< frame indices (reporting)
-  size_t first_step = 0;              ///< process() call that created it (C5's window T)
   size_t last_step = 0;               ///< process() call that last merged a segment (recency)
   InstanceState state = InstanceState::kNew;
   bool changed = true;                ///< merge count changed since the last optimisation
