@@ -237,8 +237,10 @@ RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
   const ObserverScope observed(options.observe_mapper, mapper);
 
   const auto [fed, skipped] = feed_frames(mapper, *source, options);
+  // Asked once, when reading ended: a request during the final pass did not cut the input short.
+  const bool stopped_early = options.stop_requested && options.stop_requested();
   // Ctrl-C before any frame was mapped: there is no map to finish; publish nothing.
-  if (fed == 0 && options.stop_requested && options.stop_requested()) throw_if_interrupted();
+  if (fed == 0 && stopped_early) throw_if_interrupted();
   const double online_s = seconds_since(wall_start);
   mapper.finish();
   const MapOutputs outputs = collect_outputs(mapper);
@@ -261,7 +263,7 @@ RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
   result.wall_s = seconds_since(wall_start);
   result.fps_end_to_end = static_cast<double>(fed + skipped) / std::max(result.wall_s, 1e-9);
   result.peak_rss_mb = static_cast<double>(peak_rss_bytes()) / (1024.0 * 1024.0);
-  result.stopped_early = options.stop_requested && options.stop_requested();
+  result.stopped_early = stopped_early;
   write_run_report(out.staging(), result, outputs);
   out.publish();
   return result;
