@@ -1,4 +1,6 @@
+#include <chrono>
 #include <cstdio>
+#include <thread>
 
 #include "apps/semap/commands.hpp"
 #include "apps/semap/live_view.hpp"
@@ -7,6 +9,20 @@
 #include "semap/pipeline/run_pipeline.hpp"
 
 namespace semap::app {
+
+namespace {
+
+// The outputs are already published: Ctrl-C here only ends the wait.
+void keep_serving_final_map(double seconds) {
+  if (seconds <= 0 || interrupt_signal() != 0) return;
+  std::printf("semap run: serving the final map for %.0f s more (Ctrl-C to stop)\n", seconds);
+  std::fflush(stdout);
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  while (interrupt_signal() == 0 && std::chrono::steady_clock::now() < until)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+}
+
+}  // namespace
 
 void add_run_command(CLI::App& app, CommandRunner& run) {
   auto* cmd = app.add_subcommand("run", "Map a dataset: trajectory, semantic TSDF mesh, object map");
@@ -19,6 +35,7 @@ void add_run_command(CLI::App& app, CommandRunner& run) {
     bool view = false;
     int view_port = 8765;
     int view_refresh_ms = 1500;
+    double view_keep_s = 0;
   };
   auto args = std::make_shared<Args>();
   cmd->add_option("dataset", args->options.dataset,
@@ -43,6 +60,9 @@ void add_run_command(CLI::App& app, CommandRunner& run) {
   cmd->add_option("--port", args->view_port, "--view: TCP port (0: any free port)")->check(CLI::Range(0, 65535))->capture_default_str();
   cmd->add_option("--view-refresh-ms", args->view_refresh_ms, "--view: how often the map is refreshed")
       ->check(CLI::Range(200, 60000))->capture_default_str();
+  cmd->add_option("--view-keep-s", args->view_keep_s,
+                  "--view: after the outputs are written, keep serving the final map this long (Ctrl-C ends it sooner)")
+      ->check(finite_in(0.0, 86400.0))->capture_default_str();
   cmd->callback([&run, args] {
     run = [args]() -> int {
       SemapConfig config = load_semap_config(args->config_path);
@@ -62,12 +82,13 @@ void add_run_command(CLI::App& app, CommandRunner& run) {
       }
       const RunResult result = run_pipeline(args->options, config);
       if (live)
-        std::printf("semap run: live view closed after %zu refreshes (`semap view %s` shows the final map)\n",
+        std::printf("semap run: live view refreshed %zu times (`semap view %s` shows the final map later)\n",
                     live->snapshots(), args->options.out_dir.string().c_str());
       if (result.stopped_early)
         std::fprintf(stderr, "semap run: interrupted: mapped the %zu frames read so far\n", result.frames_read);
       std::fputs(summary_table(to_json(result)).c_str(), stdout);
       std::printf("outputs in %s\n", args->options.out_dir.string().c_str());
+      if (live) keep_serving_final_map(args->view_keep_s);
       return 0;
     };
   });

@@ -33,7 +33,7 @@ ClassId wrong_class(ClassId truth, uint64_t h, const Label (&set)[N]) {
   return choices[static_cast<size_t>(hash_unit(h) * n) % n];
 }
 
-enum Tag : uint64_t { kMiss = 1, kFlicker, kFlickerClass, kBorder, kBorderRadius, kBorderKind, kMerge, kStuff, kPixel };
+enum Tag : uint64_t { kMiss = 1, kFlicker, kFlickerClass, kBorder, kBorderRadius, kBorderKind, kMerge, kStuff, kPixel, kSplit, kSplitAxis };
 
 double unit(uint64_t seed, uint64_t tag, uint64_t a, uint64_t b = 0) {
   return hash_unit(hash_combine(hash_combine(hash_combine(seed, tag), a), b));
@@ -50,6 +50,29 @@ int find_root(std::vector<int>& parent, int i) {
   return i;
 }
 
+// Over-segmentation: the far half of a split instance's box (along its longer side, or the
+// other one at random) becomes a new instance of the same class, with an id no instance uses.
+void split_instances(cv::Mat& instances, const std::vector<int>& roots, const std::vector<char>& missed,
+                     const std::vector<InstanceInfo>& info, std::vector<int>& parent, uint64_t seed, double rate) {
+  int next_id = 1;
+  for (size_t i = 1; i < info.size(); ++i)
+    if (info[i].present) next_id = static_cast<int>(i) + 1;
+  for (int r : roots) {
+    if (missed[r] || unit(seed, kSplit, r) >= rate || next_id > 65535) continue;
+    int x0 = 1 << 30, y0 = 1 << 30, x1 = -1, y1 = -1;
+    for (size_t i = 1; i < info.size(); ++i)
+      if (info[i].present && find_root(parent, static_cast<int>(i)) == r)
+        x0 = std::min(x0, info[i].x0), y0 = std::min(y0, info[i].y0), x1 = std::max(x1, info[i].x1), y1 = std::max(y1, info[i].y1);
+    const bool longer_is_x = x1 - x0 >= y1 - y0;
+    const bool split_x = unit(seed, kSplitAxis, r) < 0.75 ? longer_is_x : !longer_is_x;
+    const cv::Rect far_half = split_x ? cv::Rect((x0 + x1) / 2 + 1, y0, x1 - (x0 + x1) / 2, y1 - y0 + 1)
+                                      : cv::Rect(x0, (y0 + y1) / 2 + 1, x1 - x0 + 1, y1 - (y0 + y1) / 2);
+    if (far_half.area() <= 0) continue;
+    cv::Mat half = instances(far_half);
+    half.setTo(next_id++, half == r);
+  }
+}
+
 }  // namespace
 
 void SegmentationNoiseParams::visit(ParamVisitor& v) {
@@ -57,6 +80,7 @@ void SegmentationNoiseParams::visit(ParamVisitor& v) {
   v.param("pixel_flicker_rate", pixel_flicker_rate, "", "fraction of labelled pixels per frame with a wrong class", fraction());
   v.param("miss_rate", miss_rate, "", "fraction of instances whose mask is dropped per frame", fraction());
   v.param("merge_rate", merge_rate, "", "probability that two touching instances are merged per frame", fraction());
+  v.param("split_rate", split_rate, "", "fraction of instances per frame whose mask is split in two (over-segmentation)", fraction());
   v.param("border_rate", border_rate, "", "fraction of instances with eroded/dilated borders per frame", fraction());
   v.param("border_px", border_px, "px", "maximum erosion/dilation radius", {0, 50});
   v.param("noisy_stuff", noisy_stuff, "", "flicker also applies to wall/floor/ceiling/door regions");
@@ -149,6 +173,8 @@ std::pair<cv::Mat, cv::Mat> apply_segmentation_noise(const cv::Mat& labels_in, c
       }
     }
   }
+
+  if (p.split_rate > 0) split_instances(instances, roots, missed, info, parent, seed, p.split_rate);
 
   // 4. Eroded / dilated borders of surviving roots (ascending id: deterministic overwrite order).
   if (p.border_rate > 0 && p.border_px > 0) {

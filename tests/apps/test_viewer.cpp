@@ -348,7 +348,7 @@ TEST(Viewer, LiveViewShowsTheMapGrowingDuringSemapRun) {
   fs::remove_all(shots);
   fs::create_directories(shots);
   BackgroundServer run(shell_quote(semap_executable().string()) + " run " + shell_quote(tum.string()) + " --out " +
-                           shell_quote(out.string()) + " --view --port 0 --view-refresh-ms 500 --threads 2 --no-eval",
+                           shell_quote(out.string()) + " --view --port 0 --view-refresh-ms 500 --view-keep-s 300 --threads 2 --no-eval",
                        log);
   const std::string url = wait_for_url(run, log);
   ASSERT_FALSE(url.empty()) << "semap run --view printed no URL:\n" << read_file(log);
@@ -357,7 +357,9 @@ TEST(Viewer, LiveViewShowsTheMapGrowingDuringSemapRun) {
                                    shell_quote(shots.string()) + " --chromium " + shell_quote(chromium_path()) +
                                    " --live-gap-ms 2000");
   EXPECT_EQ(browser.exit_code, 0) << browser.output;
-  EXPECT_EQ(run.wait(std::chrono::seconds(300)), 0) << read_file(log);
+  // --view-keep-s holds the finished map up until the page is done with it (a slow browser
+  // start must not find the server gone); Ctrl-C ends the wait, or the run if still mapping.
+  EXPECT_EQ(run.interrupt_and_wait(std::chrono::seconds(120)), 0) << read_file(log);
   EXPECT_TRUE(fs::is_regular_file(out / "mesh.ply")) << "the run publishes its outputs as without --view";
   const auto result = nlohmann::json::parse(read_file(shots / "result.json"), nullptr, false);
   ASSERT_TRUE(result.is_object() && result.contains("live_second")) << browser.output;

@@ -1,6 +1,7 @@
 // Noisy-segmentation mode (issue 6 "Measured"), like the seed's Tables 1 and 2: objects per
 // class for {no optimisation, merge only, delete only, both} and WOv for {mask back-projection,
-// supervoxel-guided}. Heavy: it renders a 200-frame sequence and segments 100 keyframes twice.
+// supervoxel-guided}. Heavy: it renders a 160-frame sequence and segments its 80 keyframes three
+// times (two segmentation modes; duplicating noise).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -19,15 +20,30 @@ struct KeyframeSegments {
   std::vector<ObjectSegment> segments;
 };
 
+// Uncorrected drift between passes: in every other block of `drift_block` frames the segments
+// are placed with T_drift * T_world_camera (as when a loop closure corrected the trajectory but
+// not the segments already placed). A shift beyond d_point makes an object seen again in the
+// other state fail the C4 overlap test and start a duplicate, which C5 must merge (the redkitchen
+// chairs' duplicates were of this kind). drift_block 0: the true poses.
+Eigen::Isometry3d drift_between_passes() {
+  Eigen::Isometry3d T_drift = Eigen::Isometry3d::Identity();
+  T_drift.translation() = Eigen::Vector3d(0.06, 0.0, 0.04);
+  T_drift.linear() = Eigen::AngleAxisd(2.0 * M_PI / 180.0, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  return T_drift;
+}
+
 std::vector<KeyframeSegments> segment_sequence(const std::filesystem::path& dataset, const ObjectsConfig& config,
-                                               const SegmentationNoiseParams& noise, int frame_step) {
+                                               const SegmentationNoiseParams& noise, int frame_step,
+                                               size_t drift_block = 0) {
   const auto reader = open_dataset(dataset);
   FrameSegmenter segmenter(config, reader->camera());
   std::vector<KeyframeSegments> out;
   for (size_t i = 0; i < reader->size(); i += frame_step) {
     const Frame frame = reader->load(i);
     const auto [labels, instances] = apply_segmentation_noise(frame.labels, frame.instances, i, noise);
-    out.push_back({i, segmenter.segment(frame, test::segmentation_from_labels(labels, instances, 100), *frame.gt_T_world_camera)});
+    Pose T_world_camera = *frame.gt_T_world_camera;
+    if (drift_block > 0 && (i / drift_block) % 2 == 1) T_world_camera = drift_between_passes() * T_world_camera;
+    out.push_back({i, segmenter.segment(frame, test::segmentation_from_labels(labels, instances, 100), T_world_camera)});
   }
   return out;
 }
@@ -70,6 +86,7 @@ TEST(ObjectsNoisy, OptimisationAndSupervoxelsImproveNoisyMaps) {
   generate_dataset(synth, dir.path() / "data");
   const auto gt = test::load_gt_objects(dir.path() / "data");
   const auto truth = test::counts_per_class(gt);
+  const size_t truth_total = gt.classes.size();
   if (std::getenv("SEMAP_OBJECTS_DEBUG"))
     for (const auto& [inst, pts] : gt.points) {
       Eigen::Vector3f c = Eigen::Vector3f::Zero();
@@ -93,6 +110,11 @@ TEST(ObjectsNoisy, OptimisationAndSupervoxelsImproveNoisyMaps) {
   backprojection.segmentation_mode = SegmentationMode::backprojection;
   const auto supervoxel_frames = segment_sequence(dir.path() / "data", base, noise, frame_step);
   const auto backprojection_frames = segment_sequence(dir.path() / "data", backprojection, noise, frame_step);
+  // The counts table: the same noise plus what makes duplicates, over-segmentation (an object
+  // first seen split starts as two instances) and drift between passes.
+  SegmentationNoiseParams duplicating_noise = noise;
+  duplicating_noise.split_rate = 0.3;
+  const auto duplicating_frames = segment_sequence(dir.path() / "data", base, duplicating_noise, frame_step, 40);
 
   struct Variant {
     std::string name;
@@ -110,7 +132,7 @@ TEST(ObjectsNoisy, OptimisationAndSupervoxelsImproveNoisyMaps) {
     c.enable_optimisation = v.merge || v.del;
     c.enable_merge = v.merge;
     c.enable_delete = v.del;
-    const auto instances = map_sequence(supervoxel_frames, c);
+    const auto instances = map_sequence(duplicating_frames, c);
     table[v.name] = test::counts_per_class(instances);
     for (const auto& [cls, n] : table[v.name]) classes.insert(cls);
     errors[v.name] = count_error(table[v.name], truth);
@@ -143,19 +165,19 @@ TEST(ObjectsNoisy, OptimisationAndSupervoxelsImproveNoisyMaps) {
             << wov_supervoxel << "\nWOv (no optimisation): mask back-projection " << wov_backprojection_noopt
             << ", supervoxel-guided " << wov_supervoxel_noopt << "\n";
 
-  // Optimisation must never make the counts worse; a strict decrease is not asserted. On this
-  // scene (since the synthetic world gained touching same-class pairs and the -25 deg camera
-  // pitch) the no-optimisation map holds about one instance per visible object: the errors are
-  // the noise's merges (the two touching chairs, the bottle on the table) and one flicker false
-  // positive (a lamp beside the chairs) that C5 rightly keeps STABLE, since s_i counts every
-  // candidacy inside d_assoc (C4) and the chair segments pass it every frame. Measured (160
-  // frames, step 2): no-opt / merge / delete / both = 9 objects each, count error 3 (nothing to
-  // remove); ground truth 10. WOv supervoxel 0.777 (no opt 0.777; 0.747 before
-  // objects.point_mask_refinement), back-projection 0.700 (no opt 0.713). With objects.mask_depth_gate_k = 3: 10 / 9 / 10 / 9, error 4 / 3 / 4 / 3 (a split box
-  // is merged back), WOv 0.757 (0.755) and 0.728. The C5 rules themselves: unit tests
-  // DeletionRule, MergeRule...
-  EXPECT_LE(errors["both"], errors["no optimisation"]);
-  EXPECT_LE(totals["both"], totals["no optimisation"]);
+  // Measured (160 frames, step 2; counts with 30 % splits and a 6 cm / 2 deg drift every other
+  // 40 frames): no optimisation 42 instances for 10 objects (count error 32), merge only 39
+  // (29), delete only 13 (3: a second bookcase, chair and sofa, one per drifted pass), both 10
+  // (2). Deletion removes the split fragments (seen a few times, C5 deletion rule); merging
+  // removes the drift duplicates (STABLE, co-associated, inside each other's box, same class).
+  // Its cost: the two touching chairs, merged by the noise's mask merges in some frames, end as
+  // one. WOv (true poses, no splits): supervoxel 0.764 (no optimisation 0.818), back-projection
+  // 0.704 (0.786). The C5 rules themselves: unit tests DeletionRule, MergeRule...
+  EXPECT_GE(totals["no optimisation"], truth_total + 10) << "the noise must make duplicates for C5 to remove";
+  EXPECT_LT(totals["merge only"], totals["no optimisation"]) << "merging removes duplicates";
+  EXPECT_LT(errors["both"], errors["delete only"]) << "merging removes what deletion leaves";
+  EXPECT_LE(errors["both"], 3);  // measured 2
+  EXPECT_LT(errors["delete only"], errors["no optimisation"]) << "deletion removes the split fragments";
   EXPECT_GT(wov_supervoxel, wov_backprojection);
-  EXPECT_GE(wov_supervoxel, 0.76);  // measured 0.777
+  EXPECT_GE(wov_supervoxel, 0.74);  // measured 0.764
 }

@@ -177,6 +177,36 @@ TEST(SynthSegmentationNoise, MissMergeAndBorders) {
     for (int u = 20; u < 640; u += 40) EXPECT_EQ(bi.at<uint16_t>(v, u), instances.at<uint16_t>(v, u)) << "centres stay";
 }
 
+// Over-segmentation: a split instance keeps its class; its far half gets an id of its own that
+// no other instance has, and the near half keeps the original id.
+TEST(SynthSegmentationNoise, SplitGivesTheFarHalfANewIdOfTheSameClass) {
+  cv::Mat labels, instances;
+  make_grid(labels, instances);
+  SegmentationNoiseParams p;
+  p.flicker_rate = p.miss_rate = p.merge_rate = p.border_rate = 0;
+  p.split_rate = 0.5;
+  const auto [nl, ni] = apply_segmentation_noise(labels, instances, 3, p);
+  EXPECT_EQ(cv::countNonZero(nl != labels), 0) << "a split changes no class";
+  int split = 0, whole = 0;
+  std::set<int> new_ids;
+  for (int v = 0; v < 480; v += 40)
+    for (int u = 0; u < 640; u += 40) {
+      const int original = instances.at<uint16_t>(v + 5, u + 5);
+      if (original == 0) continue;
+      EXPECT_EQ(ni.at<uint16_t>(v + 5, u + 5), original) << "the near half keeps its id";
+      const int far = ni.at<uint16_t>(v + 35, u + 35);
+      if (far == original) {
+        ++whole;
+        continue;
+      }
+      ++split;
+      EXPECT_GT(far, 16 * 12) << "a new id, not another instance's";
+      EXPECT_TRUE(new_ids.insert(far).second) << "one new id per split instance";
+    }
+  EXPECT_GT(split, whole / 2);
+  EXPECT_LT(split, whole * 2);
+}
+
 TEST(SynthSegmentationNoise, PureDeterministicAndFast) {
   cv::Mat labels, instances;
   make_grid(labels, instances);

@@ -615,11 +615,15 @@ async function main() {
 
 // ------------------------------------------------------------------ live mode (`semap run --view`)
 
-// Polls the run's state; when a new snapshot is out, loads the map again. The camera is fitted
-// again only while the map outgrows the view (the user's own view is kept otherwise).
+// Polls the run's state; when a new snapshot is out, loads the map again. Until the user moves
+// the view, every refresh fits the camera again, up direction included (the first frames'
+// trajectory gives a poor up estimate: a rolling hand-held camera tilts it); afterwards the
+// user's view is kept and the camera is fitted again only when the map outgrows it.
 let stopLive = () => {};
 
 function startLive(live, files, floorId, fittedBounds) {
+  let userMovedView = false;
+  controls.addEventListener('start', () => { userMovedView = true; });
   const line = document.createElement('div');
   line.className = 'msg';
   line.id = 'live-status';
@@ -640,7 +644,7 @@ function startLive(live, files, floorId, fittedBounds) {
         clearMap();
         const { bounds, poses } = await loadMap(files, true);
         const outgrown = fitted === null || !fitted.clone().expandByScalar(0.25 * fitted.getSize(new THREE.Vector3()).length()).containsBox(bounds);
-        if (!bounds.isEmpty() && outgrown) {
+        if (!bounds.isEmpty() && (outgrown || !userMovedView)) {
           fitToMap(bounds, floorId, poses);
           fitted = bounds.clone();
         }

@@ -23,6 +23,7 @@ struct SegmentationNoiseParams {
   double pixel_flicker_rate = 0.0;  ///< fraction of labelled pixels with a wrong class
   double miss_rate = 0.05;          ///< fraction of instances whose mask is dropped per frame
   double merge_rate = 0.05;         ///< probability that two touching instances are merged
+  double split_rate = 0.0;          ///< fraction of instances whose mask is split in two per frame
   double border_rate = 0.3;         ///< fraction of instances whose border is eroded/dilated
   int border_px = 2;                ///< maximum erosion/dilation radius (px)
   bool noisy_stuff = true;          ///< flicker also applies to wall/floor/ceiling regions
