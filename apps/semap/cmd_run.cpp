@@ -46,6 +46,8 @@ void add_run_command(CLI::App& app, CommandRunner& run) {
   cmd->add_option("--depth-topic", args->options.dataset_options.depth_topic, "ROS bag: the depth image topic (default: the only one)");
   cmd->add_option("--out", args->options.out_dir, "output folder")->required();
   cmd->add_option("--config", args->config_path, "YAML config (see `semap config --dump`)");
+  cmd->add_option("--resume", args->options.resume_from,
+                  "continue the map of an earlier run (its output folder or map.semap): relocalise into it and extend it");
   add_enum_option(cmd, "--poses", args->options.poses, kPoseSourceNames, "camera poses");
   cmd->add_option("--segmenter", args->options.segmenter,
                   "yolo:MODEL | semantic:MODEL | groundtruth | precomputed:DIR | none (default: the config's "

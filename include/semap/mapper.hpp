@@ -95,6 +95,8 @@ struct MapperStats {
   double max_pose_correction_m = 0.0; ///< largest surface displacement of the final pass
   size_t refresh_archive_bytes = 0;   ///< memory kept for the refresh
   bool external_poses = false;        ///< the caller gave the poses
+  size_t resumed_keyframes = 0;       ///< keyframes of the saved map this Mapper continues (load())
+  size_t held_frames = 0;             ///< frames held (not fused, no pose) before relocalising into it
   std::string segmenter = "none";
 };
 
@@ -143,8 +145,22 @@ class Mapper {
 
   const SemapConfig& config() const;
   const CameraModel& camera() const;
-  /// Writes the TSDF map (map.semap, versioned, checksummed) atomically.
+  /// Writes the whole map (map.semap, versioned, checksummed) atomically: the TSDF with its
+  /// label layers, the object map, the keyframe database and pose graph (tracked runs), the
+  /// camera and the configuration. load() continues it.
   void save(const std::filesystem::path& path) const;
+
+  /// Continues the map saved in `path` by save() (issue 19): TSDF, objects and keyframes come
+  /// from the file, in its world frame. The first frames are relocalised against the saved
+  /// keyframes (METHODS A3) and held (status lost: no pose, not fused) until one verifies; then
+  /// tracking, fusion and the object map extend the saved map, the saved keyframes fixed in
+  /// the pose graph. The configuration is the file's unless `config` is given (its tsdf and
+  /// objects sections are then still the file's: the saved voxels and object points were made
+  /// with them; its fern parameters must match the file's); the camera is the file's. A map made with external poses has no keyframes: it continues only
+  /// with poses given by the caller. Saving right after loading writes the same bytes. Throws
+  /// semap::Error naming the file for an unreadable, corrupt, old or foreign file.
+  static std::unique_ptr<Mapper> load(const std::filesystem::path& path, std::optional<SemapConfig> config = std::nullopt,
+                                      std::unique_ptr<Segmenter> segmenter = nullptr);
 
  private:
   struct Impl;

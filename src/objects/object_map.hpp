@@ -4,7 +4,10 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <filesystem>
 #include <memory>
+#include <string>
+#include <string_view>
 #include <unordered_map>
 #include <optional>
 #include <utility>
@@ -92,6 +95,14 @@ class ObjectMap {
   double overlap(const std::vector<Eigen::Vector3f>& query, const ObjectInstance& instance, double distance) const;
   /// Per point: id of the instance with the nearest point within max_dist, else 0.
   std::vector<uint32_t> instance_ids_for(const std::vector<Eigen::Vector3f>& points, float max_dist) const;
+
+  /// Frame of the points of a map saved by an earlier run: no pose correction moves them.
+  static constexpr uint32_t kSavedMapFrame = 0xFFFFFFFFu;
+  /// The instances as a map.semap section (issue 19; src/objects/object_map_io.cpp).
+  std::string encode_state() const;
+  /// Replaces the instances with a saved section's; their points' frames become kSavedMapFrame.
+  /// Throws semap::Error naming `path` for a corrupt section.
+  void decode_state(std::string_view bytes, const std::filesystem::path& path);
 
  private:
   uint64_t voxel_key(const Eigen::Vector3f& p) const;

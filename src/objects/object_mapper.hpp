@@ -37,6 +37,9 @@ struct ObjectMapCounts {
   size_t final = 0;     ///< instances at the end
 };
 
+/// Name of the object map's map.semap section (ObjectMapper::encode_state).
+inline constexpr const char* kObjectsSection = "objects";
+
 class ObjectMapper {
  public:
   ObjectMapper(const ObjectsConfig& config, const CameraModel& camera);
@@ -68,6 +71,11 @@ class ObjectMapper {
   const std::vector<OptimisationStats>& optimisation_log() const { return optimisation_log_; }
   /// Created / deleted / merged over the run (from the optimisation log).
   ObjectMapCounts counts() const;
+  /// The object map and the C5 step count as a map.semap section (issue 19).
+  std::string encode_state() const;
+  /// Continues a saved object map: its instances (fixed points, their counts and states) and
+  /// step count; objects seen again associate with them (C4). Call before the first frame.
+  void restore_state(std::string_view bytes, const std::filesystem::path& path);
 
  private:
   ObjectsConfig config_;

@@ -4,9 +4,8 @@
 
 namespace semap {
 
-SemanticTsdf rebuild_tsdf(const TsdfConfig& config, size_t frame_count, int threads,
+SemanticTsdf rebuild_tsdf(SemanticTsdf tsdf, size_t frame_count, int threads,
                           const std::function<std::optional<IntegrationInput>(size_t)>& input_of) {
-  SemanticTsdf tsdf(config);
   size_t next = 0;
   tbb::parallel_pipeline(
       static_cast<size_t>(2 * std::max(threads, 1)),

@@ -9,9 +9,10 @@
 namespace semap {
 
 /// Integrates `input_of(0) ... input_of(frame_count - 1)` (nullopt: the frame is left out)
-/// into a new TSDF. Inputs are prepared in parallel (reading, repair, label decoding) and
-/// integrated serially in frame order, so one thread still gives byte-identical maps.
-SemanticTsdf rebuild_tsdf(const TsdfConfig& config, size_t frame_count, int threads,
+/// into `start` (an empty TSDF, or the saved map a resumed run continues). Inputs are prepared
+/// in parallel (reading, repair, label decoding) and integrated serially in frame order, so one
+/// thread still gives byte-identical maps.
+SemanticTsdf rebuild_tsdf(SemanticTsdf start, size_t frame_count, int threads,
                           const std::function<std::optional<IntegrationInput>(size_t)>& input_of);
 
 /// How far a pose correction moves a surface point at `range_m` from the camera: the camera

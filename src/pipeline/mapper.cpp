@@ -8,6 +8,8 @@
 
 #include "semap/core/error.hpp"
 #include "objects/object_mapper.hpp"
+#include "core/archive.hpp"
+#include "pipeline/map_archive.hpp"
 #include "pipeline/map_refresh.hpp"
 #include "pipeline/refresh_archive.hpp"
 #include "pipeline/stage.hpp"
@@ -19,6 +21,8 @@
 #include "segmentation/temporal_filter.hpp"
 #include "tracking/depth_repair.hpp"
 #include "tracking/tracker.hpp"
+#include "tracking/tracker_state.hpp"
+#include "tsdf/map_io.hpp"
 #include "tsdf/semantic_tsdf.hpp"
 
 namespace semap {
@@ -34,6 +38,7 @@ struct TrackedFrame {
   Pose T_world_camera;
   bool segment = false;      ///< its labels are on their way; fusion waits for them
   bool map_objects = false;  ///< its segmentation also feeds the object map (C2-C4)
+  bool held = false;         ///< no pose yet (see FrameLog::held)
 };
 
 /// What fusion hands to the object map.
@@ -76,6 +81,7 @@ struct FrameLog {
   double timestamp = 0.0;
   Pose T_world_camera_online = Pose::Identity();
   bool fused = false;
+  bool held = false;  ///< a resumed map not relocalised into yet: no pose (Tracker::resume)
 };
 
 FrameStatus status_of(const TrackResult& r) {
@@ -150,6 +156,10 @@ struct Mapper::Impl {
   void archive_for_refresh(const TrackedFrame& item);
   void hand_to_objects(TrackedFrame& item, SegmentationResult seg);
   void map_objects(ObjectWork& work);
+  // --- saved maps (issue 19) ---
+  ArchiveSections sections() const;
+  void restore(const ArchiveSections& sections, const std::filesystem::path& path);
+  SemanticTsdf refresh_start() const;
   // --- finish ---
   Trajectory current_trajectory() const;
   void refresh_map(const Trajectory& optimised);
@@ -179,6 +189,9 @@ struct Mapper::Impl {
   std::atomic<size_t> frames_fused{0}, segmented{0}, dropped{0}, failed{0}, object_frames{0}, skipped_accumulations{0};
   std::atomic<size_t> objects_in_map{0};
   MapperStats final_stats;  ///< the parts only finish() knows
+  std::string config_yaml;  ///< the config section (the loaded file's text when it came with the map)
+  std::string saved_tsdf;   ///< a loaded map's TSDF section: the map refresh starts from it
+  std::filesystem::path saved_path;
   bool finished = false;
   Trajectory final_trajectory;
   // Stages last: destroyed first (segmentation, then fusion, then objects), each drained.
@@ -217,6 +230,7 @@ TrackedFrame Mapper::Impl::locate(const Frame& frame, const std::optional<Pose>&
   std::lock_guard lock(tracker_mutex);
   if (!tracker) tracker = std::make_unique<Tracker>(config.tracking, camera);
   const TrackResult r = tracker->track(frame);
+  item.held = r.status == TrackingStatus::lost && r.reference_keyframe < 0;
   result.tracking_ms = ms_since(t0);
   timings.add("tracking", result.tracking_ms);
   item.T_world_camera = r.T_world_camera;
@@ -406,14 +420,20 @@ void Mapper::Impl::refresh_map(const Trajectory& optimised) {
     std::lock_guard lock(log_mutex);
     frames = log;
   }
-  if (optimised.size() != frames.size()) throw Error("Mapper", "tracker returned a trajectory of another length");
+  // The tracker's trajectory leaves out held frames (no pose): align it with the log.
+  std::vector<Pose> T_world_camera(frames.size(), Pose::Identity());
+  size_t posed = 0;
+  for (size_t k = 0; k < frames.size(); ++k)
+    if (!frames[k].held && posed < optimised.size()) T_world_camera[k] = optimised[posed++].T_world_camera;
+  if (posed != optimised.size() || posed + final_stats.held_frames != frames.size())
+    throw Error("Mapper", "tracker returned a trajectory of another length");
   std::unordered_map<uint32_t, Eigen::Isometry3f> corrections;
   double max_displacement = 0.0;
   for (size_t k = 0; k < frames.size(); ++k) {
+    if (frames[k].held) continue;
     const Pose& online = frames[k].T_world_camera_online;
-    corrections[static_cast<uint32_t>(k)] = (optimised[k].T_world_camera * online.inverse()).cast<float>();
-    max_displacement = std::max(max_displacement, surface_displacement_m(online, optimised[k].T_world_camera,
-                                                                         config.tsdf.max_depth));
+    corrections[static_cast<uint32_t>(k)] = (T_world_camera[k] * online.inverse()).cast<float>();
+    max_displacement = std::max(max_displacement, surface_displacement_m(online, T_world_camera[k], config.tsdf.max_depth));
   }
   final_stats.max_pose_correction_m = max_displacement;
   if (final_stats.loop_edges == 0) return;
@@ -433,8 +453,8 @@ void Mapper::Impl::refresh_map(const Trajectory& optimised) {
     spdlog::warn("map refresh skipped: {}", final_stats.map_refresh_note);
     return;
   }
-  SemanticTsdf rebuilt = rebuild_tsdf(config.tsdf, frames.size(), config.pipeline.threads,
-                                      [&](size_t k) { return refresh_input(k, optimised[k].T_world_camera); });
+  SemanticTsdf rebuilt = rebuild_tsdf(refresh_start(), frames.size(), config.pipeline.threads,
+                                      [&](size_t k) { return refresh_input(k, T_world_camera[k]); });
   {
     std::lock_guard lock(tsdf_mutex);
     tsdf = std::move(rebuilt);
@@ -446,6 +466,7 @@ void Mapper::Impl::refresh_map(const Trajectory& optimised) {
 Mapper::Mapper(const SemapConfig& config, const CameraModel& camera, std::unique_ptr<Segmenter> segmenter) {
   config.validate();
   impl_ = std::make_unique<Impl>(config, camera, std::move(segmenter));
+  impl_->config_yaml = encode_config_section(config);
 }
 
 Mapper::~Mapper() = default;
@@ -469,7 +490,7 @@ FrameResult Mapper::add_frame(const Frame& frame, FrameHints hints) {
   result.fused = result.status != FrameStatus::lost;  // a pose that failed its checks is never fused
   {
     std::lock_guard lock(m.log_mutex);
-    m.log.push_back({frame.index, frame.timestamp, item.T_world_camera, result.fused});
+    m.log.push_back({frame.index, frame.timestamp, item.T_world_camera, result.fused, item.held});
   }
   if (result.fused) {
     m.schedule_segmentation(item, result.status == FrameStatus::keyframe, std::move(hints.segmentation));
@@ -493,6 +514,7 @@ void Mapper::finish() {
       std::lock_guard lock(m.tracker_mutex);
       optimised = m.tracker->finish();
       m.final_stats.loop_edges = m.tracker->stats().loop_edges;
+      m.final_stats.held_frames = m.tracker->stats().held_frames;
     }
     m.timings.add("pose_graph_final", ms_since(t0));
     m.refresh_map(optimised);
@@ -562,6 +584,8 @@ MapperStats Mapper::stats() const {
     s.relocalisations = t.relocalisations;
     s.loop_edges = t.loop_edges;
     s.optimisations = t.optimisations;
+    s.resumed_keyframes = t.resumed_keyframes;
+    s.held_frames = t.held_frames;
   }
   s.frames_fused = m.frames_fused;
   s.segmented_frames = m.segmented;
@@ -588,9 +612,61 @@ void Mapper::add_timing(const std::string& stage, double ms) { impl_->timings.ad
 const SemapConfig& Mapper::config() const { return impl_->config; }
 const CameraModel& Mapper::camera() const { return impl_->camera; }
 
-void Mapper::save(const std::filesystem::path& path) const {
-  std::lock_guard lock(impl_->tsdf_mutex);
-  impl_->tsdf.save(path);
+ArchiveSections Mapper::Impl::sections() const {
+  ArchiveSections out;
+  {
+    std::lock_guard lock(tsdf_mutex);
+    out[kTsdfSection] = encode_tsdf_section(tsdf.map());
+  }
+  {
+    std::lock_guard lock(objects_mutex);
+    out[kObjectsSection] = objects.encode_state();
+  }
+  {
+    std::lock_guard lock(tracker_mutex);
+    if (tracker) out[kTrackingSection] = encode_tracker_state(tracker->state());
+  }
+  out[kCameraSection] = encode_camera_section(camera);
+  out[kConfigSection] = config_yaml;
+  return out;
+}
+
+void Mapper::Impl::restore(const ArchiveSections& saved, const std::filesystem::path& path) {
+  saved_tsdf = archive_section(saved, kTsdfSection, path);
+  saved_path = path;
+  tsdf = SemanticTsdf(decode_tsdf_section(saved_tsdf, path, config.tsdf));
+  objects.restore_state(archive_section(saved, kObjectsSection, path), path);
+  objects_in_map = objects.instances().size();
+  external_poses = saved.count(kTrackingSection) == 0;  // no keyframes: only given poses can continue it
+  if (*external_poses) return;
+  tracker = std::make_unique<Tracker>(config.tracking, camera);
+  tracker->resume(decode_tracker_state(saved.at(kTrackingSection), path));
+}
+
+SemanticTsdf Mapper::Impl::refresh_start() const {
+  if (saved_tsdf.empty()) return SemanticTsdf(config.tsdf);
+  return SemanticTsdf(decode_tsdf_section(saved_tsdf, saved_path, config.tsdf));
+}
+
+void Mapper::save(const std::filesystem::path& path) const { write_map_archive(path, impl_->sections()); }
+
+std::unique_ptr<Mapper> Mapper::load(const std::filesystem::path& path, std::optional<SemapConfig> config,
+                                     std::unique_ptr<Segmenter> segmenter) {
+  const ArchiveSections saved = read_map_archive(path);
+  const std::string& saved_yaml = archive_section(saved, kConfigSection, path);
+  const SemapConfig saved_config = decode_config_section(saved_yaml, path);
+  const CameraModel camera = decode_camera_section(archive_section(saved, kCameraSection, path), path);
+  if (config) {
+    require_same_ferns(saved_config.tracking, config->tracking, path);
+    const int tsdf_threads = config->tsdf.threads;  // a run-time setting
+    config->tsdf = saved_config.tsdf;  // the saved voxels and object points are made with these
+    config->tsdf.threads = tsdf_threads;
+    config->objects = saved_config.objects;
+  }
+  auto mapper = std::make_unique<Mapper>(config.value_or(saved_config), camera, std::move(segmenter));
+  if (!config) mapper->impl_->config_yaml = saved_yaml;
+  mapper->impl_->restore(saved, path);
+  return mapper;
 }
 
 }  // namespace semap

@@ -147,6 +147,18 @@ void check_run_is_usable(const std::string& input, const MapperStats& stats, con
     throw Error(input, "the map is empty: no frame had valid depth within tsdf.min_depth..max_depth");
 }
 
+/// A resumed run says how it joined the saved map; one that never relocalised into it is an
+/// error (its frames were held, not merged at a guessed pose).
+void report_relocalisation(const std::string& input, const RunOptions& options, const MapperStats& stats) {
+  if (stats.resumed_keyframes == 0) return;
+  if (stats.held_frames == stats.frames)
+    throw Error(input, "no frame relocalised into the saved map " + options.resume_from.string() + " (" +
+                           std::to_string(stats.resumed_keyframes) + " keyframes tried): the recordings do not overlap "
+                           "enough; map this recording without --resume");
+  if (options.show_progress)
+    std::fprintf(stderr, "semap run: relocalised into the saved map after %zu held frames\n", stats.held_frames);
+}
+
 void write_run_report(const std::filesystem::path& dir, const RunResult& result, const MapOutputs& outputs) {
   const cv::Mat topdown = render_topdown(outputs.mesh, outputs.trajectory, report_objects(outputs.objects));
   write_atomic_with(dir / "topdown.png", [&](const std::filesystem::path& tmp) {
@@ -182,6 +194,43 @@ SemapConfig mapper_config_for(const SemapConfig& config, const FrameSource& sour
   c.segmentation.segmenter = "none";
   if (source.is_live()) c.segmentation.when_busy = WhenBusy::drop_oldest;
   return c;
+}
+
+/// The saved map a run continues (RunOptions::resume_from): a folder's map.semap, or the file.
+std::filesystem::path saved_map_path(const RunOptions& options) {
+  std::error_code ec;
+  const std::filesystem::path path = std::filesystem::is_directory(options.resume_from, ec)
+                                         ? options.resume_from / "map.semap" : options.resume_from;
+  const std::filesystem::path out = std::filesystem::weakly_canonical(options.out_dir, ec);
+  if (std::filesystem::weakly_canonical(path.parent_path(), ec) == out)
+    throw Error(options.out_dir, "--out is the folder --resume reads: write the continued map to another folder");
+  if (options.poses == PoseSource::groundtruth)
+    throw Error(path, "--resume relocalises the recording into the saved map: it needs --poses track");
+  return path;
+}
+
+bool same_intrinsics(const PinholeIntrinsics& a, const PinholeIntrinsics& b) {
+  auto near = [](double x, double y) { return std::abs(x - y) <= 1e-6 * std::max(1.0, std::abs(x)); };
+  return a.width == b.width && a.height == b.height && near(a.fx, b.fx) && near(a.fy, b.fy) && near(a.cx, b.cx) &&
+         near(a.cy, b.cy);
+}
+
+std::unique_ptr<Mapper> make_run_mapper(const RunOptions& options, const SemapConfig& config, const FrameSource& source,
+                                        std::unique_ptr<Segmenter> segmenter) {
+  const SemapConfig mapper_config = mapper_config_for(config, source);
+  if (options.resume_from.empty()) return std::make_unique<Mapper>(mapper_config, source.camera(), std::move(segmenter));
+  const std::filesystem::path path = saved_map_path(options);
+  auto mapper = Mapper::load(path, mapper_config, std::move(segmenter));
+  const PinholeIntrinsics &saved = mapper->camera().depth, &given = source.camera().depth;
+  if (!same_intrinsics(saved, given))
+    throw Error(options.dataset, "its depth camera (" + std::to_string(given.width) + "x" + std::to_string(given.height) +
+                                     ", fx " + std::to_string(given.fx) + ") is not the one of the saved map " +
+                                     path.string() + " (" + std::to_string(saved.width) + "x" +
+                                     std::to_string(saved.height) + ", fx " + std::to_string(saved.fx) + ")");
+  if (options.show_progress)
+    std::fprintf(stderr, "semap run: continuing %s (%zu keyframes, %zu objects): relocalising the first frames into it\n",
+                 path.string().c_str(), mapper->stats().resumed_keyframes, mapper->stats().objects);
+  return mapper;
 }
 
 /// finish() re-reads frames of a dataset for the map refresh (only the depth image when the
@@ -232,7 +281,8 @@ RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
   if (!segmenter && options.show_progress)
     std::fprintf(stderr, "semap run: no segmenter: mapping geometry and colour only (add --segmenter "
                          "yolo:MODEL.onnx for classes and objects)\n");
-  Mapper mapper(mapper_config_for(config, *source), source->camera(), std::move(segmenter));
+  const std::unique_ptr<Mapper> mapper_owner = make_run_mapper(options, config, *source, std::move(segmenter));
+  Mapper& mapper = *mapper_owner;
   set_reloader(mapper, dataset);
   const ObserverScope observed(options.observe_mapper, mapper);
 
@@ -247,6 +297,7 @@ RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
   RunResult result;
   result.mapper = mapper.stats();
   check_run_is_usable(source->name(), result.mapper, outputs, skipped);
+  report_relocalisation(source->name(), options, result.mapper);
 
   write_map_outputs(mapper, outputs, out.staging());
   if (options.evaluate && dataset) result.evaluation = evaluate_run(*dataset, outputs, poses_given);
@@ -310,6 +361,8 @@ nlohmann::json to_json(const RunResult& r) {
     report["tracking"] = {{"keyframes", m.keyframes}, {"lost_frames", m.lost_frames},
                           {"relocalisations", m.relocalisations}, {"loop_edges", m.loop_edges},
                           {"optimisations", m.optimisations}};
+  if (m.resumed_keyframes > 0)  // issue 19: how this recording joined the saved map
+    report["resumed"] = {{"saved_keyframes", m.resumed_keyframes}, {"held_frames", m.held_frames}};
   return report;
 }
 

@@ -100,7 +100,7 @@ bool PoseGraph::optimize(int max_iterations, double loop_huber_scale) {
   for (auto& [id, q] : quats) {
     if (!problem.HasParameterBlock(q.coeffs().data())) continue;
     problem.SetManifold(q.coeffs().data(), new ceres::EigenQuaternionManifold);
-    if (id == fixed) {
+    if (id == fixed || id < fixed_below_) {
       problem.SetParameterBlockConstant(q.coeffs().data());
       problem.SetParameterBlockConstant(trans[id].data());
     }

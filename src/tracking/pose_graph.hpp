@@ -23,9 +23,11 @@ class PoseGraph {
   void add_vertex(int id, const Pose& T_world_vertex);
   void add_edge(const PoseGraphEdge& edge);
   bool has_vertex(int id) const { return vertices_.count(id) > 0; }
-  /// Optimises all vertices except the smallest id (fixed gauge). Returns false when Ceres
-  /// reports failure (poses are then left unchanged).
+  /// Optimises all vertices except the smallest id (fixed gauge) and those below
+  /// set_fixed_below(). Returns false when Ceres reports failure (poses are then left unchanged).
   bool optimize(int max_iterations, double loop_huber_scale);
+  /// Vertices with an id below `id` stay fixed (a resumed map's keyframes, issue 19).
+  void set_fixed_below(int id) { fixed_below_ = id; }
   const std::map<int, Pose>& vertices() const { return vertices_; }
   Pose pose(int id) const { return vertices_.at(id); }
   const std::vector<PoseGraphEdge>& edges() const { return edges_; }
@@ -36,6 +38,7 @@ class PoseGraph {
  private:
   std::map<int, Pose> vertices_;
   std::vector<PoseGraphEdge> edges_;
+  int fixed_below_ = 0;
 };
 
 /// Converts an ICP Hessian (left perturbation exp(xi) * T in the target frame, order rotation,

@@ -21,6 +21,7 @@
 #include "tracking/parallel.hpp"
 #include "tracking/pose_graph.hpp"
 #include "tracking/registration.hpp"
+#include "tracking/tracker_state.hpp"
 
 namespace semap {
 
@@ -39,18 +40,6 @@ double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 double deg(double rad) { return rad * 180.0 / M_PI; }
-
-struct Keyframe {
-  int id = 0;
-  size_t frame_index = 0;
-  double timestamp = 0.0;
-  cv::Mat depth;           ///< repaired depth, metres (pyramids are rebuilt from it on demand)
-  cv::Mat gray;            ///< grey image (CV_8UC1) for the photometric ICP term
-  FrameFeatures features;
-  FernCode code;
-  int parent = -1;         ///< keyframe it was tracked from
-  Pose T_parent_this = Pose::Identity();
-};
 
 struct FrameRecord {
   size_t frame_index = 0;
@@ -114,6 +103,7 @@ struct Tracker::Impl {
   bool velocity_valid = false;
   uint64_t seen_version = 0;
   bool lost = false;
+  int resumed_keyframes = 0;  ///< keyframes 0..n-1 came from a saved map (resume): fixed, relocalised into
 
   Impl(const TrackingConfig& c, const CameraModel& cam)
       : cfg(c), camera(cam), intr(cam.depth), ferns(make_fern_params(c)) {
@@ -351,6 +341,7 @@ struct Tracker::Impl {
       for (const auto& [id, pose] : kf_pose) snapshot.add_vertex(id, pose);
       for (const auto& e : graph.edges()) snapshot.add_edge(e);
     }
+    snapshot.set_fixed_below(resumed_keyframes);  // the saved map was fused with these poses
     if (!snapshot.optimize(cfg.pose_graph_iterations, cfg.pose_graph_loop_huber)) return;
     std::lock_guard<std::mutex> lock(mutex);
     for (const auto& [id, pose] : snapshot.vertices()) kf_pose[id] = pose;
@@ -358,6 +349,28 @@ struct Tracker::Impl {
       if (!snapshot.has_vertex(kf->id) && kf->parent >= 0) kf_pose[kf->id] = kf_pose.at(kf->parent) * kf->T_parent_this;
     ++stats.optimisations;
     ++pose_version;
+  }
+
+  /// Frame-to-reference registration from the motion prior, then with the wide-baseline effort
+  /// when that failed (issue 16: consecutive-frame speed stays as it was).
+  Registration register_to_reference(const FrameFeatures& features, const std::vector<DepthLevel>& frame_pyramid,
+                                     const Pose& prior, size_t frame_index, TrackResult& result) {
+    std::shared_ptr<const Keyframe> ref_kf;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      ref_kf = keyframes[reference];
+    }
+    const uint32_t seed = uint32_t(cfg.seed) + uint32_t(frame_index);
+    Registration reg = register_to(features, frame_pyramid, ref_kf->features, ref_pyramid, &prior, seed);
+    result.timings.ransac_ms = reg.ransac_ms;
+    result.timings.icp_ms = reg.icp_ms;
+    if (reg.accepted) return reg;
+    const double step = velocity_valid && !lost ? pose_distance(Pose::Identity(), velocity) : 0.0;
+    Registration wide = register_to(features, frame_pyramid, ref_kf->features, ref_pyramid, &prior,
+                                    seed * 2654435761u + 17u, Effort::wide, step);
+    result.timings.ransac_ms += wide.ransac_ms;
+    result.timings.icp_ms += wide.icp_ms;
+    return wide.accepted ? wide : reg;
   }
 
   // --- per-frame path ---
@@ -394,7 +407,7 @@ struct Tracker::Impl {
     std::vector<DepthLevel> frame_pyramid = pyramid(depth, gray, /*source_only=*/true);
     result.timings.features_ms = ms_since(t0);
 
-    if (reference < 0) {  // first frame: world = its camera
+    if (reference < 0 && resumed_keyframes == 0) {  // first frame: world = its camera
       t0 = Clock::now();
       make_keyframe(frame, depth, gray, std::move(features), ferns.encode(rgb, depth), std::move(frame_pyramid), -1,
                     Pose::Identity(), IcpResult{});
@@ -421,23 +434,9 @@ struct Tracker::Impl {
     seen_version = version;
 
     const Pose prior = velocity_valid && !lost ? T_ref_last * velocity : T_ref_last;
-    std::shared_ptr<const Keyframe> ref_kf;
-    {
-      std::lock_guard<std::mutex> lock(mutex);
-      ref_kf = keyframes[reference];
-    }
-    const uint32_t seed = uint32_t(cfg.seed) + uint32_t(frame.index);
-    Registration reg = register_to(features, frame_pyramid, ref_kf->features, ref_pyramid, &prior, seed);
-    result.timings.ransac_ms = reg.ransac_ms;
-    result.timings.icp_ms = reg.icp_ms;
-    if (!reg.accepted) {  // the prior failed: wide-baseline effort (issue 16)
-      const double step = velocity_valid && !lost ? pose_distance(Pose::Identity(), velocity) : 0.0;
-      Registration wide = register_to(features, frame_pyramid, ref_kf->features, ref_pyramid, &prior,
-                                      seed * 2654435761u + 17u, Effort::wide, step);
-      result.timings.ransac_ms += wide.ransac_ms;
-      result.timings.icp_ms += wide.icp_ms;
-      if (wide.accepted) reg = wide;
-    }
+    // A resumed map not yet relocalised into has no reference: straight to relocalisation.
+    Registration reg = reference >= 0 ? register_to_reference(features, frame_pyramid, prior, frame.index, result)
+                                      : Registration{};
     result.feature_matches = reg.matches;
     result.ransac_inliers = reg.inliers;
     result.used_motion_prior = reg.used_prior;
@@ -474,7 +473,8 @@ struct Tracker::Impl {
         std::lock_guard<std::mutex> lock(mutex);
         ++stats.lost_frames;
         ++stats.frames;
-        result.T_world_camera = kf_pose.at(reference) * T_ref_last;
+        if (reference < 0) ++stats.held_frames;  // a resumed map not relocalised into yet: no pose
+        result.T_world_camera = reference >= 0 ? kf_pose.at(reference) * T_ref_last : Pose::Identity();
       }
       result.status = status;
       result.reference_keyframe = reference;
@@ -522,9 +522,8 @@ struct Tracker::Impl {
       result.T_world_camera = kf_pose.at(reference) * T_ref_frame;
       // Velocity from consecutive world poses (both read with the same keyframe poses).
       const FrameRecord& prev = frames[frames.size() - 2];
-      const Pose prev_world = kf_pose.at(prev.reference) * prev.T_ref_frame;
-      velocity = prev_world.inverse() * result.T_world_camera;
-      velocity_valid = true;
+      velocity_valid = prev.reference >= 0;
+      if (velocity_valid) velocity = (kf_pose.at(prev.reference) * prev.T_ref_frame).inverse() * result.T_world_camera;
       ++stats.frames;
     }
     T_ref_last = T_ref_frame;
@@ -633,7 +632,7 @@ struct Tracker::Impl {
     auto add = [&](const std::shared_ptr<const Keyframe>& kf) {
       if (std::find(out.begin(), out.end(), kf) == out.end()) out.push_back(kf);
     };
-    add(keyframes[reference]);
+    if (reference >= 0) add(keyframes[reference]);
     for (int i = 0; i < int(by_fern.size()) && i < cfg.relocalisation_candidates; ++i) add(by_fern[i].second);
     for (int i = 0; i < cfg.relocalisation_recent && i < int(keyframes.size()); ++i) add(keyframes[keyframes.size() - 1 - i]);
     return out;
@@ -661,7 +660,8 @@ struct Tracker::Impl {
   Trajectory trajectory_locked() const {
     Trajectory out;
     out.reserve(frames.size());
-    for (const auto& f : frames) out.push_back({f.timestamp, orthonormalized(kf_pose.at(f.reference) * f.T_ref_frame)});
+    for (const auto& f : frames)
+      if (f.reference >= 0) out.push_back({f.timestamp, orthonormalized(kf_pose.at(f.reference) * f.T_ref_frame)});
     return out;
   }
 };
@@ -700,5 +700,35 @@ TrackerStats Tracker::stats() const {
 }
 
 const TrackingConfig& Tracker::config() const { return impl_->cfg; }
+
+TrackerState Tracker::state() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  TrackerState out;
+  out.keyframes = impl_->keyframes;
+  for (const auto& kf : impl_->keyframes) out.T_world_keyframe.push_back(impl_->kf_pose.at(kf->id));
+  out.edges = impl_->graph.edges();
+  return out;
+}
+
+void Tracker::resume(const TrackerState& state) {
+  Impl& t = *impl_;
+  if (!t.frames.empty() || !t.keyframes.empty()) throw Error("Tracker::resume", "must be called before the first frame");
+  if (state.keyframes.empty()) throw Error("Tracker::resume", "the saved map has no keyframes to relocalise against");
+  for (const auto& kf : state.keyframes)
+    if (kf->depth.cols != t.intr.width || kf->depth.rows != t.intr.height)
+      throw Error("Tracker::resume", "the saved map's keyframes are " + std::to_string(kf->depth.cols) + "x" +
+                                         std::to_string(kf->depth.rows) + ", this camera's depth is " +
+                                         std::to_string(t.intr.width) + "x" + std::to_string(t.intr.height));
+  std::lock_guard<std::mutex> lock(t.mutex);
+  t.keyframes = state.keyframes;
+  for (size_t i = 0; i < state.keyframes.size(); ++i) {
+    t.kf_pose[int(i)] = state.T_world_keyframe[i];
+    t.ferns.add(int(i), state.keyframes[i]->code);
+  }
+  for (const PoseGraphEdge& e : state.edges) t.graph.add_edge(e);
+  t.resumed_keyframes = int(state.keyframes.size());
+  t.stats.resumed_keyframes = state.keyframes.size();
+  t.lost = true;
+}
 
 }  // namespace semap

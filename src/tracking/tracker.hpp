@@ -30,7 +30,7 @@ struct TrackResult {
   Pose T_world_camera = Pose::Identity();  ///< current best estimate (uses the latest keyframe poses)
   bool is_keyframe = false;                ///< this frame became a new keyframe
   TrackingStatus status = TrackingStatus::ok;
-  int reference_keyframe = -1;             ///< keyframe id the frame was registered against
+  int reference_keyframe = -1;             ///< keyframe id the frame was registered against (-1: held, see resume())
   int feature_matches = 0;                 ///< ORB matches to the reference keyframe
   int ransac_inliers = 0;                  ///< voting-RANSAC inliers (0 when RANSAC failed)
   bool used_motion_prior = false;          ///< ICP started from the motion prior (too few inliers)
@@ -54,7 +54,11 @@ struct KeyframeInfo {
 struct TrackerStats {
   size_t frames = 0, keyframes = 0, lost_frames = 0, relocalisations = 0;
   size_t loop_edges = 0, keyframe_reuses = 0, optimisations = 0;
+  size_t resumed_keyframes = 0;  ///< keyframes of the map this tracker continues (resume())
+  size_t held_frames = 0;        ///< frames of a resumed map before the first relocalisation
 };
+
+struct TrackerState;  // tracking/tracker_state.hpp
 
 class Tracker {
  public:
@@ -68,14 +72,23 @@ class Tracker {
   /// Tracks one frame (frames in sequence order). Throws semap::Error for empty/mistyped images.
   TrackResult track(const Frame& frame);
   /// Waits for pending loop closure, runs the final pose-graph optimisation and returns the
-  /// pose of EVERY tracked frame (optimised keyframe pose * relative pose to it).
+  /// pose of every tracked frame (optimised keyframe pose * relative pose to it), as trajectory().
   Trajectory finish();
-  /// Every tracked frame with the current keyframe poses (no waiting, no optimisation).
+  /// Every tracked frame with the current keyframe poses (no waiting, no optimisation). Frames
+  /// held before a resumed map relocalised have no pose and are left out.
   Trajectory trajectory() const;
   /// Keyframes with their latest poses; after finish() these are the optimised poses the map
   /// should be re-integrated with.
   std::vector<KeyframeInfo> keyframes() const;
   TrackerStats stats() const;
+  /// The keyframe database and pose graph (map.semap's tracking section, issue 19).
+  TrackerState state() const;
+  /// Continues a saved map (issue 19): its keyframes become this tracker's first keyframes and
+  /// stay fixed in the pose graph (the saved map was fused with their poses). Each frame is
+  /// relocalised against them (A3) and held, with status lost and no pose in trajectory(),
+  /// until one verifies; tracking, keyframes and loop edges then continue in the map's world
+  /// frame. Call before the first frame; throws semap::Error otherwise.
+  void resume(const TrackerState& state);
   const TrackingConfig& config() const;
 
  private:

@@ -42,6 +42,9 @@ struct RunOptions {
   /// Called with the run's Mapper once it exists and with nullptr before it is destroyed (also
   /// when the run fails): e.g. a live view reading its thread-safe accessors meanwhile.
   std::function<void(const Mapper*)> observe_mapper;
+  /// Continue a saved map (issue 19): an output folder of an earlier run, or its map.semap. The
+  /// recording is relocalised into it and extends it (Mapper::load); the folder is only read.
+  std::filesystem::path resume_from;
 };
 
 /// What a run produced: the report.json document, typed.

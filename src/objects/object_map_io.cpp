@@ -1,0 +1,110 @@
+// ObjectMap as a map.semap section (issue 19):
+//   u32 format | u32 next id | u64 instance count | per instance: u32 id, i32 n, i32 s, i32 s_total,
+//   u8 state, u8 changed, u8 decided class, u64 first frame, u64 last frame, u64 last step,
+//   f64[kNumClasses] score sum, u64 points, per point f32 x y z + u8 r g b,
+//   u64 co-associations, per entry (ascending id) u32 id, i32 count
+// Point frames are not kept: a saved map's points are fixed (kSavedMapFrame). The voxel index,
+// centroid sum and box are rebuilt from the points.
+#include <algorithm>
+
+#include "core/archive.hpp"
+#include "objects/object_map.hpp"
+#include "objects/object_mapper.hpp"
+
+namespace semap {
+namespace {
+
+constexpr uint32_t kObjectStateFormat = 1;
+
+void put_instance(ByteWriter& w, const ObjectInstance& inst) {
+  w.put(inst.id), w.put(static_cast<int32_t>(inst.n));
+  w.put(static_cast<int32_t>(inst.association_count)), w.put(static_cast<int32_t>(inst.total_associations));
+  w.put(static_cast<uint8_t>(inst.state)), w.put(static_cast<uint8_t>(inst.changed)), w.put(inst.decided_class);
+  w.put(static_cast<uint64_t>(inst.first_frame)), w.put(static_cast<uint64_t>(inst.last_frame));
+  w.put(static_cast<uint64_t>(inst.last_step));
+  std::vector<double> scores = inst.score_sum;
+  scores.resize(kNumClasses, 0.0);
+  w.put_bytes(scores.data(), scores.size() * sizeof(double));
+  w.put(static_cast<uint64_t>(inst.points.size()));
+  for (size_t i = 0; i < inst.points.size(); ++i) {
+    w.put_bytes(inst.points[i].data(), 3 * sizeof(float));
+    w.put(inst.colours[i]);
+  }
+  std::vector<std::pair<uint32_t, int>> co(inst.co_association.begin(), inst.co_association.end());
+  std::sort(co.begin(), co.end());  // unordered_map order is not stable: bytes must be
+  w.put(static_cast<uint64_t>(co.size()));
+  for (const auto& [id, count] : co) w.put(id), w.put(static_cast<int32_t>(count));
+}
+
+}  // namespace
+
+std::string ObjectMap::encode_state() const {
+  ByteWriter w;
+  w.put(kObjectStateFormat);
+  w.put(next_id_);
+  w.put(static_cast<uint64_t>(instances_.size()));
+  for (const ObjectInstance& inst : instances_) put_instance(w, inst);
+  return std::move(w.bytes());
+}
+
+void ObjectMap::decode_state(std::string_view bytes, const std::filesystem::path& path) {
+  ByteReader r(bytes, path, kObjectsSection);
+  if (const uint32_t format = r.get<uint32_t>(); format != kObjectStateFormat)
+    r.fail("objects format " + std::to_string(format) + ", this build reads " + std::to_string(kObjectStateFormat));
+  const uint32_t next_id = r.get<uint32_t>();
+  std::vector<ObjectInstance> instances(r.get_count(64));
+  for (ObjectInstance& inst : instances) {
+    inst.id = r.get<uint32_t>();
+    if (inst.id == 0 || inst.id >= next_id) r.fail("an object id is not below the next id");
+    inst.n = r.get<int32_t>(), inst.association_count = r.get<int32_t>(), inst.total_associations = r.get<int32_t>();
+    const uint8_t state = r.get<uint8_t>();
+    if (state > static_cast<uint8_t>(InstanceState::kStable)) r.fail("bad object state");
+    inst.state = static_cast<InstanceState>(state);
+    inst.changed = r.get<uint8_t>() != 0;
+    inst.decided_class = r.get<ClassId>();
+    if (inst.decided_class >= kNumClasses) r.fail("bad object class");
+    inst.first_frame = r.get<uint64_t>(), inst.last_frame = r.get<uint64_t>(), inst.last_step = r.get<uint64_t>();
+    inst.score_sum.resize(kNumClasses);
+    r.read(inst.score_sum.data(), kNumClasses * sizeof(double));
+    const size_t n_points = r.get_count(3 * sizeof(float) + sizeof(Rgb8));
+    std::vector<Eigen::Vector3f> points(n_points);
+    std::vector<Rgb8> colours(n_points);
+    for (size_t i = 0; i < n_points; ++i) {
+      r.read(points[i].data(), 3 * sizeof(float));
+      if (!points[i].allFinite()) r.fail("an object point is not finite");
+      colours[i] = r.get<Rgb8>();
+    }
+    add_points(inst, points, colours, {kSavedMapFrame});
+    if (inst.points.size() != n_points) r.fail("two points of an object share a map voxel");
+    const size_t n_co = r.get_count(8);
+    for (size_t i = 0; i < n_co; ++i) {
+      const uint32_t id = r.get<uint32_t>();
+      inst.co_association[id] = r.get<int32_t>();
+    }
+  }
+  r.expect_end();
+  instances_ = std::move(instances);
+  next_id_ = next_id;
+}
+
+}  // namespace semap
+
+namespace semap {
+
+std::string ObjectMapper::encode_state() const {
+  ByteWriter w;
+  w.put(static_cast<uint64_t>(step_));
+  w.put_string(map_.encode_state());
+  return std::move(w.bytes());
+}
+
+void ObjectMapper::restore_state(std::string_view bytes, const std::filesystem::path& path) {
+  ByteReader r(bytes, path, kObjectsSection);
+  const auto step = r.get<uint64_t>();
+  const std::string map_bytes = r.get_string();
+  r.expect_end();
+  map_.decode_state(map_bytes, path);
+  step_ = static_cast<size_t>(step);
+}
+
+}  // namespace semap
