@@ -1,6 +1,7 @@
-// map.semap loader (load_map). The input is the file without its trailing checksum: the
-// target appends the FNV-1a 64 of bytes [16, end) as save_map does (src/tsdf/map_io.cpp), so
-// the fuzzer reaches the header and block parsing instead of stopping at the checksum. Every
+// map.semap loader (load_map: the archive container of core/archive.cpp and its tsdf
+// section). The input is the file without its trailing checksum: the target appends the
+// FNV-1a 64 of bytes [12, end) as write_map_archive does, so the fuzzer reaches the section
+// table and block parsing instead of stopping at the checksum. Every
 // 64th input is also loaded as-is (checksum/truncation paths).
 #include <cstring>
 
@@ -10,7 +11,7 @@
 
 namespace {
 
-// The checksum of the map format (map_io.hpp: FNV-1a 64 over header + payload).
+// The checksum of the map format (core/archive.hpp: FNV-1a 64 of everything after the version).
 uint64_t fnv1a(const uint8_t* data, size_t n) {
   uint64_t h = 1469598103934665603ULL;
   for (size_t i = 0; i < n; ++i) {
@@ -45,8 +46,8 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   std::string bytes(reinterpret_cast<const char*>(data), size);
-  if (size >= 16 && fnv1a(data, size) % 64 != 0) {
-    const uint64_t sum = fnv1a(data + 16, size - 16);
+  if (size >= 12 && fnv1a(data, size) % 64 != 0) {
+    const uint64_t sum = fnv1a(data + 12, size - 12);
     bytes.append(reinterpret_cast<const char*>(&sum), sizeof sum);
   }
   const auto path = semap::fuzz::scratch_dir() / "map.semap";

@@ -147,16 +147,9 @@ void check_run_is_usable(const std::string& input, const MapperStats& stats, con
     throw Error(input, "the map is empty: no frame had valid depth within tsdf.min_depth..max_depth");
 }
 
-/// A resumed run says how it joined the saved map; one that never relocalised into it is an
-/// error (its frames were held, not merged at a guessed pose).
-void report_relocalisation(const std::string& input, const RunOptions& options, const MapperStats& stats) {
-  if (stats.resumed_keyframes == 0) return;
-  if (stats.held_frames == stats.frames)
-    throw Error(input, "no frame relocalised into the saved map " + options.resume_from.string() + " (" +
-                           std::to_string(stats.resumed_keyframes) + " keyframes tried): the recordings do not overlap "
-                           "enough; map this recording without --resume");
-  if (options.show_progress)
-    std::fprintf(stderr, "semap run: relocalised into the saved map after %zu held frames\n", stats.held_frames);
+/// A resumed run whose every frame was held: it never relocalised into the saved map.
+bool never_relocalised_stats(const MapperStats& stats) {
+  return stats.resumed_keyframes > 0 && stats.frames > 0 && stats.held_frames == stats.frames;
 }
 
 void write_run_report(const std::filesystem::path& dir, const RunResult& result, const MapOutputs& outputs) {
@@ -264,6 +257,39 @@ class ObserverScope {
 
 }  // namespace
 
+/// A source mapped to the end (pose graph, map refresh, final object pass).
+struct MappedSource {
+  std::unique_ptr<Mapper> mapper;
+  size_t fed = 0, skipped = 0;
+  bool stopped_early = false;
+  bool not_merged = false;  ///< --resume given, but the recording never relocalised into the saved map
+  Clock::time_point reading_ended;  ///< the streaming stages' end (fps online), before finish()
+};
+
+MappedSource map_source(const RunOptions& options, const SemapConfig& config, FrameSource& source) {
+  std::unique_ptr<Segmenter> segmenter = make_run_segmenter(options, config, source);
+  if (!segmenter && options.show_progress)
+    std::fprintf(stderr, "semap run: no segmenter: mapping geometry and colour only (add --segmenter "
+                         "yolo:MODEL.onnx for classes and objects)\n");
+  MappedSource out;
+  out.mapper = make_run_mapper(options, config, source, std::move(segmenter));
+  set_reloader(*out.mapper, source.dataset());
+  const ObserverScope observed(options.observe_mapper, *out.mapper);
+  std::tie(out.fed, out.skipped) = feed_frames(*out.mapper, source, options);
+  // Asked once, when reading ended: a request during the final pass did not cut the input short.
+  out.stopped_early = options.stop_requested && options.stop_requested();
+  // Ctrl-C before any frame was mapped: there is no map to finish; publish nothing.
+  if (out.fed == 0 && out.stopped_early) throw_if_interrupted();
+  out.reading_ended = Clock::now();
+  out.mapper->finish();
+  if (out.mapper->stats().resumed_keyframes > 0 && options.show_progress && !never_relocalised_stats(out.mapper->stats()))
+    std::fprintf(stderr, "semap run: relocalised into the saved map after %zu held frames\n",
+                 out.mapper->stats().held_frames);
+  return out;
+}
+
+bool never_relocalised(const MappedSource& mapped) { return never_relocalised_stats(mapped.mapper->stats()); }
+
 RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
   config.validate();
   const auto wall_start = Clock::now();
@@ -277,27 +303,26 @@ RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
   if (poses_given && !(dataset && dataset->has_ground_truth()))
     throw Error(options.dataset, "--poses groundtruth needs a ground-truth trajectory, this input has none");
 
-  std::unique_ptr<Segmenter> segmenter = make_run_segmenter(options, config, *source);
-  if (!segmenter && options.show_progress)
-    std::fprintf(stderr, "semap run: no segmenter: mapping geometry and colour only (add --segmenter "
-                         "yolo:MODEL.onnx for classes and objects)\n");
-  const std::unique_ptr<Mapper> mapper_owner = make_run_mapper(options, config, *source, std::move(segmenter));
-  Mapper& mapper = *mapper_owner;
-  set_reloader(mapper, dataset);
-  const ObserverScope observed(options.observe_mapper, mapper);
-
-  const auto [fed, skipped] = feed_frames(mapper, *source, options);
-  // Asked once, when reading ended: a request during the final pass did not cut the input short.
-  const bool stopped_early = options.stop_requested && options.stop_requested();
-  // Ctrl-C before any frame was mapped: there is no map to finish; publish nothing.
-  if (fed == 0 && stopped_early) throw_if_interrupted();
-  const double online_s = seconds_since(wall_start);
-  mapper.finish();
+  MappedSource mapped = map_source(options, config, *source);
+  if (never_relocalised(mapped) && dataset && !mapped.stopped_early) {
+    // Issue 19: not merged at a guessed pose; the recording becomes a map of its own.
+    std::fprintf(stderr, "semap run: %s: no frame relocalised into the saved map %s (%zu keyframes tried): "
+                         "mapping this recording on its own, not merged\n",
+                 source->name().c_str(), options.resume_from.string().c_str(), mapped.mapper->stats().resumed_keyframes);
+    RunOptions alone = options;
+    alone.resume_from.clear();
+    mapped = map_source(alone, config, *open_frame_source(options.dataset.string(), options.dataset_options));
+    mapped.not_merged = true;
+  }
+  const auto [fed, skipped] = std::pair(mapped.fed, mapped.skipped);
+  const bool stopped_early = mapped.stopped_early;
+  const double online_s = std::chrono::duration<double>(mapped.reading_ended - wall_start).count();
+  Mapper& mapper = *mapped.mapper;
   const MapOutputs outputs = collect_outputs(mapper);
   RunResult result;
   result.mapper = mapper.stats();
+  result.not_merged = mapped.not_merged;
   check_run_is_usable(source->name(), result.mapper, outputs, skipped);
-  report_relocalisation(source->name(), options, result.mapper);
 
   write_map_outputs(mapper, outputs, out.staging());
   if (options.evaluate && dataset) result.evaluation = evaluate_run(*dataset, outputs, poses_given);
@@ -363,6 +388,7 @@ nlohmann::json to_json(const RunResult& r) {
                           {"optimisations", m.optimisations}};
   if (m.resumed_keyframes > 0)  // issue 19: how this recording joined the saved map
     report["resumed"] = {{"saved_keyframes", m.resumed_keyframes}, {"held_frames", m.held_frames}};
+  if (r.not_merged) report["resumed"] = {{"merged", false}, {"why", "no frame relocalised into the saved map"}};
   return report;
 }
 

@@ -521,9 +521,10 @@ struct Tracker::Impl {
       std::lock_guard<std::mutex> lock(mutex);
       result.T_world_camera = kf_pose.at(reference) * T_ref_frame;
       // Velocity from consecutive world poses (both read with the same keyframe poses).
-      const FrameRecord& prev = frames[frames.size() - 2];
-      velocity_valid = prev.reference >= 0;
-      if (velocity_valid) velocity = (kf_pose.at(prev.reference) * prev.T_ref_frame).inverse() * result.T_world_camera;
+      // A resumed map's first frame may relocalise at once: then there is no previous frame.
+      const FrameRecord* prev = frames.size() >= 2 ? &frames[frames.size() - 2] : nullptr;
+      velocity_valid = prev && prev->reference >= 0;
+      if (velocity_valid) velocity = (kf_pose.at(prev->reference) * prev->T_ref_frame).inverse() * result.T_world_camera;
       ++stats.frames;
     }
     T_ref_last = T_ref_frame;

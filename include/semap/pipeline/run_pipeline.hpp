@@ -62,6 +62,9 @@ struct RunResult {
   double peak_rss_mb = 0.0;
   int threads = 1;
   bool stopped_early = false;  ///< stop_requested() ended the input before its end
+  /// --resume given, but no frame relocalised into the saved map: the recording was mapped on
+  /// its own (issue 19: never merged at a guessed pose).
+  bool not_merged = false;
   Evaluation evaluation;
   std::map<std::string, TimingSummary> timings;
 };
