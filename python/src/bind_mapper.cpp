@@ -23,18 +23,34 @@ using Clock = std::chrono::steady_clock;
 
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
+void apply_segmenter_spec(SemapConfig& c, const py::handle& segmenter) {
+  if (segmenter.is_none()) return;
+  if (!py::isinstance<py::str>(segmenter))
+    bad_argument("segmenter", "None or a spec: yolo:MODEL.onnx | semantic:MODEL.onnx | precomputed:DIR | none",
+                 segmenter);
+  c.segmentation.segmenter = segmenter.cast<std::string>();
+}
+
 class PyMapper {
  public:
   PyMapper(const CameraModel& camera, const py::handle& config, const py::handle& segmenter) {
     SemapConfig c = config_from_python(config);
-    if (!segmenter.is_none()) {
-      if (!py::isinstance<py::str>(segmenter))
-        bad_argument("segmenter", "None or a spec: yolo:MODEL.onnx | semantic:MODEL.onnx | precomputed:DIR | none",
-                     segmenter);
-      c.segmentation.segmenter = segmenter.cast<std::string>();
-    }
+    apply_segmenter_spec(c, segmenter);
     py::gil_scoped_release nogil;  // a network segmenter loads its model
     mapper_ = std::make_unique<Mapper>(c, camera);
+  }
+  explicit PyMapper(std::unique_ptr<Mapper> mapper) : mapper_(std::move(mapper)) {}
+
+  /// Mapper::load: continue a saved map.semap (issue 19).
+  static std::unique_ptr<PyMapper> load(const std::filesystem::path& path, const py::handle& config,
+                                        const py::handle& segmenter) {
+    std::optional<SemapConfig> c;
+    if (!config.is_none() || !segmenter.is_none()) {
+      c = config_from_python(config);
+      apply_segmenter_spec(*c, segmenter);
+    }
+    py::gil_scoped_release nogil;
+    return std::make_unique<PyMapper>(Mapper::load(path, c));
   }
   ~PyMapper() {
     py::gil_scoped_release nogil;  // workers drain their queues and release frames (GIL)
@@ -104,6 +120,7 @@ class PyMapper {
     d["finished"] = s.finished, d["map_refreshed"] = s.map_refreshed, d["map_refresh_note"] = s.map_refresh_note;
     d["max_pose_correction_m"] = s.max_pose_correction_m, d["external_poses"] = s.external_poses;
     d["segmenter"] = s.segmenter;
+    d["resumed_keyframes"] = s.resumed_keyframes, d["held_frames"] = s.held_frames;
     return d;
   }
 
@@ -149,6 +166,11 @@ void bind_mapper(py::module_& m) {
            "labels: uint8 class ids and instances: uint16 ids (H, W, depth size), the caller's own "
            "segmentation. The arrays are referenced, not copied: do not write into them afterwards.")
       .def("finish", &PyMapper::finish, "final pose graph, map refresh, final object pass (idempotent)")
+      .def_static("load", &PyMapper::load, py::arg("path"), py::arg("config") = py::none(),
+                  py::arg("segmenter") = py::none(),
+                  "Continues a saved map (a map.semap, e.g. out_dir/map.semap of save()): new frames are first "
+                  "relocalised into it (held, status 'lost', until one verifies), then extend it in its world "
+                  "frame. config / segmenter as for Mapper(); the map's tsdf and objects settings stay the file's.")
       .def("save", &PyMapper::save, py::arg("out_dir"),
            "trajectory.txt, mesh.ply, objects.json + objects/*.ply, map.semap (what `semap run` writes)")
       .def("trajectory", &PyMapper::trajectory, "list of (timestamp, (4, 4) T_world_camera)")

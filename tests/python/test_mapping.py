@@ -138,3 +138,24 @@ def test_caller_given_poses(tum, tum_frames):
     tracked.add_frame(frames[0].rgb, frames[0].depth, frames[0].timestamp)
     with pytest.raises(semap.Error, match="has a pose, but this Mapper tracks"):
         tracked.add_frame(frames[1].rgb, frames[1].depth, frames[1].timestamp, pose=frames[1].gt_pose)
+
+
+def test_load_continues_a_saved_map(tum, tum_mapped, tmp_path):
+    """Issue 19: Mapper.load continues out/map.semap; the next frames relocalise into it and
+    keep its world frame (the saved slice's poses and the new ones agree with one trajectory)."""
+    mapper, _ = tum_mapped
+    mapper.save(tmp_path / "first")
+    again = semap.Mapper.load(tmp_path / "first" / "map.semap", config={"pipeline": {"threads": 1}})
+    assert again.stats()["resumed_keyframes"] == mapper.stats()["keyframes"]
+    later = [tum[i] for i in range(TUM_SLICE - 5, TUM_SLICE + 15)]  # overlaps the saved slice
+    results = [again.add_frame(f.rgb, f.depth, f.timestamp) for f in later]
+    again.finish()
+    assert results[0].status in ("relocalised", "lost")
+    assert sum(r.status != "lost" for r in results) >= 15
+    saved = dict(mapper.trajectory())
+    for t, pose in again.trajectory():  # the overlap: same world frame, same place
+        if t in saved:
+            assert np.linalg.norm(pose[:3, 3] - saved[t][:3, 3]) < 0.03
+    with pytest.raises(semap.Error, match="not a semap map file"):
+        (tmp_path / "junk.semap").write_bytes(b"not a map at all")
+        semap.Mapper.load(tmp_path / "junk.semap")
