@@ -8,6 +8,7 @@
 
 #include "semap/core/error.hpp"
 #include "core/paths.hpp"
+#include "io/json_number.hpp"
 #include "semap/io/ply_io.hpp"
 
 namespace semap {
@@ -77,7 +78,7 @@ void require_unique_ids(const std::vector<EvalObject>& objects, const std::files
 
 ClassId class_of(const nlohmann::json& object) {
   if (object.contains("class_id") && object["class_id"].is_number_integer()) {
-    const int c = object["class_id"].get<int>();
+    const int c = static_cast<int>(json_number(object["class_id"], "class_id", -1e9, 1e9, true));
     if (c >= 0 && c < kNumClasses) return static_cast<ClassId>(c);
   }
   if (object.contains("class") && object["class"].is_string())
@@ -237,7 +238,7 @@ std::vector<EvalObject> gt_objects_from_scene_json(const std::filesystem::path& 
   for (const auto& jo : scene["objects"]) {
     try {
       EvalObject o;
-      o.id = jo.at("instance_id").get<uint32_t>();
+      o.id = static_cast<uint32_t>(json_number(jo.at("instance_id"), "instance_id", 0, 4294967295.0, true));
       o.class_id = class_of(jo);
       if (jo.contains("primitives") && jo["primitives"].is_array() && !jo["primitives"].empty()) {
         for (const auto& prim : jo["primitives"]) sample_box_surface(prim, spacing, o.points);
@@ -278,13 +279,13 @@ std::vector<EvalObject> load_map_objects(const std::filesystem::path& objects_js
   for (const auto& jo : doc["objects"]) {
     EvalObject o;
     try {
-      o.id = jo.at("id").get<uint32_t>();
+      o.id = static_cast<uint32_t>(json_number(jo.at("id"), "id", 0, 4294967295.0, true));
     } catch (const std::exception& e) {
       throw Error(objects_json, "object " + std::to_string(k) + ": missing/invalid \"id\"");
     }
     o.class_id = class_of(jo);
     const size_t point_count = jo.contains("point_count") && jo["point_count"].is_number_unsigned()
-                                   ? jo["point_count"].get<size_t>() : 1;
+                                   ? static_cast<size_t>(json_number(jo["point_count"], "point_count", 0, 1e15, true)) : 1;
     if (jo.contains("points_file") && jo["points_file"].is_string()) {
       const auto file = folder / jo["points_file"].get<std::string>();
       if (std::filesystem::exists(file) || point_count > 0) o.points = read_ply(file).vertices.points;

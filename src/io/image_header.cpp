@@ -95,7 +95,8 @@ ImageHeader tiff_header(const Bytes& b, const std::string& source) {
   return {"TIFF", width, height};
 }
 
-// P1..P6: magic, then width and height as decimal tokens with '#' comments between.
+// P1..P6: magic, then width and height as decimal tokens with '#' comments between, parsed
+// as OpenCV's PxM reader does.
 ImageHeader pnm_header(std::string_view text, const std::string& source) {
   size_t pos = 2;
   const auto token = [&]() -> std::optional<uint64_t> {
@@ -109,6 +110,9 @@ ImageHeader pnm_header(std::string_view text, const std::string& source) {
     while (pos < text.size() && std::isdigit(static_cast<unsigned char>(text[pos])) && digits < 12)
       v = v * 10 + static_cast<uint64_t>(text[pos++] - '0'), ++digits;
     if (digits == 0) return std::nullopt;
+    // OpenCV's reader consumes the byte ending a number, whatever it is: "2#1" is 2 then 1
+    // (fuzz_image found the header read as 2x5 where OpenCV decoded 2x1).
+    if (pos < text.size()) ++pos;
     return v;
   };
   const auto width = token(), height = token();

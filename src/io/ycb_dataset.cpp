@@ -8,6 +8,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
+#include "io/json_number.hpp"
 #include "semap/core/error.hpp"
 #include "io/dataset_layouts.hpp"
 #include "io/text_util.hpp"
@@ -88,7 +89,8 @@ CameraModel read_camera(const fs::path& base, const fs::path& frames) {
     const auto& model = json.at("rig").at("camera").at(0).at("camera_model");
     const auto params = model.at("params").get<std::vector<double>>();
     if (params.size() < 4) throw Error(json_file, "camera params need fu fv u0 v0");
-    camera.depth = {params[0], params[1], params[2], params[3], model.at("width").get<int>(), model.at("height").get<int>()};
+    camera.depth = {params[0], params[1], params[2], params[3], static_cast<int>(json_number(model.at("width"), "width", 0, 1e6, true)),
+                    static_cast<int>(json_number(model.at("height"), "height", 0, 1e6, true))};
   } catch (const nlohmann::json::exception& e) {
     throw Error(json_file, std::string("malformed camera JSON: ") + e.what());
   }

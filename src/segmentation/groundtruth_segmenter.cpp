@@ -1,5 +1,6 @@
 #include "segmentation/groundtruth_segmenter.hpp"
 
+#include <cmath>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -8,10 +9,12 @@
 #include "semap/core/error.hpp"
 #include "core/paths.hpp"
 #include "io/image_io.hpp"
+#include "io/json_number.hpp"
 #include "segmentation/class_mapping.hpp"
 #include "segmentation/segmentation_utils.hpp"
 
 namespace semap {
+
 
 SegmentationResult result_from_label_images(const cv::Mat& labels, const cv::Mat& instances) {
   CV_Assert(labels.type() == CV_8UC1);
@@ -128,18 +131,18 @@ SegmentationResult PrecomputedSegmenter::read(const std::string& name) const {
   try {
     for (const auto& ji : j.at("instances")) {
       InstanceDetection inst;
-      inst.id = ji.at("id").get<uint16_t>();
+      inst.id = static_cast<uint16_t>(json_number(ji.at("id"), "id", 0, 65535, true));
       if (ji.contains("class")) inst.class_id = map_class_name(ji.at("class").get<std::string>());
       else {
-        const int c = ji.at("class_id").get<int>();
+        const int c = static_cast<int>(json_number(ji.at("class_id"), "class_id", -1e9, 1e9, true));
         inst.class_id = c >= 0 && c < kNumClasses ? ClassId(c) : id(Label::kOther);
       }
-      inst.score = ji.value("score", 1.f);
+      inst.score = ji.contains("score") ? static_cast<float>(json_number(ji["score"], "score", 0, 1e6, false)) : 1.f;
       if (ji.contains("class_scores") && ji["class_scores"].is_object()) {
         inst.class_scores.assign(kNumClasses, 0.f);
         for (const auto& [k, v] : ji["class_scores"].items()) {
           const ClassId c = map_class_name(k);
-          inst.class_scores[c] = std::max(inst.class_scores[c], v.get<float>());
+          inst.class_scores[c] = std::max(inst.class_scores[c], static_cast<float>(json_number(v, "class_scores", 0, 1e6, false)));
         }
       }
       if (inst16.empty()) throw Error(inst_path, "instances listed in the JSON but the instance image is missing");

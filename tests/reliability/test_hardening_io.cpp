@@ -222,6 +222,12 @@ TEST(HardeningImages, EveryFormatsDeclaredSizeIsCheckedBeforeDecoding) {
     EXPECT_EQ(read_colour_image(tmp / (std::string("ok") + ext)).size(), cv::Size(37, 23)) << ext;
   }
   EXPECT_GE(formats, 5u);
+  // PNM numbers end at any byte, as in OpenCV's reader: "2#1" is width 2, height 1 (fuzz_image
+  // found a file whose header was read as 2x5 while OpenCV decoded 2x1).
+  const std::string pnm = std::string("P5\f#comment\n\f2#1\n5 75 7");
+  const auto pnm_header = io_detail::read_image_header(pnm, "odd.pgm");
+  EXPECT_EQ(pnm_header.width, 2u);
+  EXPECT_EQ(pnm_header.height, 1u);
 
   const long rss_before = max_rss_mb();
   for (const auto& bomb : image_bombs()) {
