@@ -5,6 +5,10 @@
 //
 //   build/bench/bench_tsdf [--frames 200] [--synthetic-frames 60] [--threads 2]
 //                          [--voxels 0.01,0.02,0.05] [--synthetic DIR]
+//                          [--variants ours_projective_core,...]  (a subset of ours; Open3D always runs)
+// Each variant's JSON carries map_checksum (FNV-1a over every layer of the sorted blocks): a
+// speed-up that keeps the map bit-identical keeps the checksum.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -93,6 +97,23 @@ struct Runner {
   virtual nlohmann::json finish(int threads) = 0;
 };
 
+/// FNV-1a over the block indices and every voxel layer, in sorted block order.
+uint64_t map_checksum(const TsdfMap& map) {
+  uint64_t h = 1469598103934665603ULL;
+  auto add = [&](const void* data, size_t n) {
+    const auto* p = static_cast<const uint8_t*>(data);
+    for (size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ULL;
+  };
+  for (const Block* b : map.sorted_blocks()) {
+    add(b->index.data(), sizeof(int) * 3);
+    add(b->voxels.data(), sizeof(b->voxels));
+    if (b->label_confidence) add(b->label_confidence.get(), kBlockVoxels);
+    if (b->bayes) add(b->bayes.get(), static_cast<size_t>(kBlockVoxels) * map.bayes().bytes_per_voxel());
+    if (b->colour) add(b->colour.get(), kBlockVoxels * sizeof(Rgb8));
+  }
+  return h;
+}
+
 struct OursRunner : Runner {
   Variant v;
   std::unique_ptr<SemanticTsdf> tsdf;
@@ -117,7 +138,13 @@ struct OursRunner : Runner {
     tsdf->integrate(in);
     wall_ms += ms_since(t0);
     cpu_ms_total += cpu_ms() - c0;
+    const IntegrationStats& s = tsdf->integrator().last_stats();
+    ++frames;
+    voxel_updates += s.voxel_updates;
+    touched_blocks += s.touched_blocks;
+    rays += s.rays;
   }
+  size_t frames = 0, voxel_updates = 0, touched_blocks = 0, rays = 0;
   nlohmann::json finish(int threads) override {
     const auto t0 = Clock::now();
     const TriangleMesh mesh = MeshExtractor(threads).extract_full(tsdf->map());
@@ -133,6 +160,11 @@ struct OursRunner : Runner {
     j["memory_mb"] = map.memory_bytes() / 1e6;
     j["mesh_ms"] = mesh_ms;
     j["mesh_triangles"] = mesh.triangles.size();
+    j["map_checksum"] = map_checksum(map);
+    const double n = static_cast<double>(std::max<size_t>(frames, 1));
+    j["voxel_updates_per_frame"] = voxel_updates / n;
+    j["touched_blocks_per_frame"] = touched_blocks / n;
+    if (rays) j["rays_per_frame"] = rays / n;
     return j;
   }
 };
@@ -225,11 +257,17 @@ nlohmann::json hash_benchmark(const TsdfMap& map) {
   return j;
 }
 
-std::vector<double> parse_list(const std::string& s) {
-  std::vector<double> out;
+std::vector<std::string> split_list(const std::string& s) {
+  std::vector<std::string> out;
   std::stringstream ss(s);
   std::string item;
-  while (std::getline(ss, item, ',')) out.push_back(std::stod(item));
+  while (std::getline(ss, item, ',')) out.push_back(item);
+  return out;
+}
+
+std::vector<double> parse_list(const std::string& s) {
+  std::vector<double> out;
+  for (const std::string& item : split_list(s)) out.push_back(std::stod(item));
   return out;
 }
 
@@ -246,6 +284,7 @@ int main(int argc, char** argv) {
   int frames = 200, synthetic_frames = 60, threads = 2;
   std::vector<double> voxels = {0.01, 0.02, 0.05};
   fs::path synthetic_dir;
+  std::vector<std::string> only_variants;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i], v = argv[i + 1];
     if (a == "--frames") frames = std::stoi(v);
@@ -253,6 +292,7 @@ int main(int argc, char** argv) {
     else if (a == "--threads") threads = std::stoi(v);
     else if (a == "--voxels") voxels = parse_list(v);
     else if (a == "--synthetic") synthetic_dir = v;
+    else if (a == "--variants") only_variants = split_list(v);
     else {
       std::cerr << "unknown option " << a << "\n";
       return 2;
@@ -272,7 +312,7 @@ int main(int argc, char** argv) {
   }
   if (!synthetic_dir.empty()) sequences.push_back(load_sequence("synthetic", synthetic_dir, synthetic_frames));
 
-  const std::vector<Variant> variants = {
+  std::vector<Variant> variants = {
       {"ours_projective_core", "projective", false, false, false},
       {"ours_grouped_core", "grouped", false, false, false},
       {"ours_projective_labels_rgb", "projective", true, false, true},
@@ -280,6 +320,10 @@ int main(int argc, char** argv) {
       {"ours_projective_labels_bayes_rgb", "projective", true, true, true},
       {"ours_grouped_labels_bayes_rgb", "grouped", true, true, true},
   };
+  if (!only_variants.empty())
+    std::erase_if(variants, [&](const Variant& v) {
+      return std::find(only_variants.begin(), only_variants.end(), v.name) == only_variants.end();
+    });
   nlohmann::json out;
   out["threads"] = threads;
   for (const Sequence& seq : sequences) {
@@ -314,7 +358,7 @@ int main(int argc, char** argv) {
         jv.push_back(j);
       }
       (void)o3d;
-      if (seq.name == "tum_fr1_rpy" && voxel == 0.02)
+      if (seq.name == "tum_fr1_rpy" && voxel == 0.02 && !variants.empty() && variants[0].name == "ours_projective_core")
         out["block_hash"] = hash_benchmark(static_cast<OursRunner&>(*runners[0]).tsdf->map());
       std::ostringstream key;
       key << voxel * 100 << "cm";

@@ -468,6 +468,80 @@ class GroupedIntegrator final : public ArenaIntegrator {
 // =============================================================================================
 // Projective integration (nvblox / Open3D style)
 // =============================================================================================
+/// What the voxel loop reads of one pixel, packed: its random reads of depth, colour and label
+/// images were three cache misses per voxel (the loop's hottest instructions), now one.
+struct PixelSample {
+  float depth = 0.0f;  ///< metres, 0 = not usable
+  Rgb8 rgb;            ///< from the BGR colour image (zero without one)
+  ClassId label = 0;   ///< 0 without a label image
+};
+static_assert(sizeof(PixelSample) == 8);
+
+/// Row v of the frame as samples (a sequential pass over each input image).
+void fill_samples(const IntegrationInput& in, const FrameSetup& f, int v, PixelSample* out) {
+  const float* depth = in.depth.ptr<float>(v);
+  for (int u = 0; u < f.width; ++u) out[u].depth = usable_depth(depth[u], f.min_range, f.max_range) ? depth[u] : 0.0f;
+  if (f.colour) {
+    const uint8_t* bgr = in.colour.ptr<uint8_t>(v);
+    for (int u = 0; u < f.width; ++u) out[u].rgb = Rgb8{bgr[3 * u + 2], bgr[3 * u + 1], bgr[3 * u]};
+  }
+  const uint8_t* labels = f.labels ? in.labels.ptr<uint8_t>(v) : nullptr;
+  for (int u = 0; u < f.width; ++u) out[u].label = labels ? labels[u] : 0;
+}
+
+/// Frame constants of the voxel projection, as values (voxel stores, bytes that may alias
+/// anything, would otherwise make every iteration reload them from the frame set-up).
+struct ProjectionFrame {
+  float fx, fy, cx, cy, min_range, delta, width, height;
+  int width_px;
+  const PixelSample* samples;  ///< width x height, then one unusable sample
+  int32_t off_image;           ///< index of that unusable sample
+};
+
+/// The voxels of one block the frame updates (METHODS B6: a usable pixel, d > -delta), by
+/// local index, with each voxel's pixel and signed distance along the ray.
+struct BlockHits {
+  std::array<int32_t, kBlockVoxels> pixel;
+  std::array<float, kBlockVoxels> sdf, z, norm, inv_z;
+  std::array<uint16_t, kBlockVoxels> voxel;  ///< the first `count` are the hits
+  int count = 0;
+};
+
+/// Projects the 512 voxels of a block (camera-frame centre of voxel 0 and the per-axis steps),
+/// without branches: pass 1 finds every voxel's pixel (nearest, the unusable off-image sample
+/// when behind the camera or outside), pass 2 reads all their depths with independent loads
+/// (the cache misses overlap instead of serialising behind mispredicted branches) and lists
+/// the voxels to update. Same arithmetic as one branchy loop: same hits and distances.
+inline void project_block(const Eigen::Vector3f& base, const Eigen::Vector3f& step_x, const Eigen::Vector3f& step_y,
+                          const Eigen::Vector3f& step_z, const ProjectionFrame& f, BlockHits& h) {
+  for (int z = 0; z < kBlockSide; ++z)
+    for (int y = 0; y < kBlockSide; ++y) {
+      Eigen::Vector3f pc = base + step_y * static_cast<float>(y) + step_z * static_cast<float>(z);
+      for (int x = 0; x < kBlockSide; ++x, pc += step_x) {
+        const int li = x + kBlockSide * (y + kBlockSide * z);
+        const float inv_z = 1.0f / pc.z();
+        // Nearest pixel: floor(x + 0.5). For x in [0, W) truncation is that floor; the test on
+        // the float (false for NaN too) skips the same pixels as floor(x) outside [0, W).
+        const float x_pix = f.fx * pc.x() * inv_z + f.cx + 0.5f, y_pix = f.fy * pc.y() * inv_z + f.cy + 0.5f;
+        const bool in_image =
+            pc.z() > f.min_range && x_pix >= 0.0f && x_pix < f.width && y_pix >= 0.0f && y_pix < f.height;
+        h.pixel[li] = in_image ? static_cast<int>(y_pix) * f.width_px + static_cast<int>(x_pix) : f.off_image;
+        h.z[li] = pc.z();
+        h.norm[li] = pc.norm();
+        h.inv_z[li] = inv_z;
+      }
+    }
+  int n = 0;
+  for (int li = 0; li < kBlockVoxels; ++li) {
+    const float depth = f.samples[h.pixel[li]].depth;
+    const float sdf = (depth - h.z[li]) * h.norm[li] * h.inv_z[li];  // along the ray
+    h.sdf[li] = sdf;
+    h.voxel[n] = static_cast<uint16_t>(li);
+    n += depth != 0.0f && !(sdf <= -f.delta);
+  }
+  h.count = n;
+}
+
 class ProjectiveIntegrator final : public ArenaIntegrator {
  public:
   explicit ProjectiveIntegrator(const TsdfConfig& cfg) : ArenaIntegrator(cfg) {}
@@ -482,7 +556,8 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
     const int kRowsPerChunk = 8 * stride;
     const int n_chunks = (H + kRowsPerChunk - 1) / kRowsPerChunk;
     chunk_blocks_.resize(n_chunks);
-    usable_depth_.resize(static_cast<size_t>(W) * H);
+    samples_.resize(static_cast<size_t>(W) * H + 1);  // + the unusable pixel off-image voxels read
+    samples_.back() = PixelSample{};
     rays_.update(f);
     const Eigen::Matrix3f R_blocks = f.R_wc / block_size;  // camera -> world, in block units
     const Eigen::Vector3f t_blocks = f.t_wc / block_size;
@@ -494,17 +569,15 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
       std::array<uint64_t, 64> recent;
       recent.fill(~0ULL);
       for (int v = c * kRowsPerChunk; v < std::min(H, (c + 1) * kRowsPerChunk); ++v) {
-        // Every row, in one sequential pass: the depth (0 = unusable) that step 2 looks up at
-        // random comes from this warm copy instead of a cold frame (its misses were the voxel
-        // loop's hottest instruction).
-        const float* depth = in.depth.ptr<float>(v);
-        float* usable = &usable_depth_[static_cast<size_t>(v) * W];
-        for (int u = 0; u < W; ++u) usable[u] = usable_depth(depth[u], f.min_range, f.max_range) ? depth[u] : 0.0f;
+        // Every row, in one sequential pass: the depth (0 = unusable), colour and label that
+        // step 2 looks up at random come from this warm packed copy (PixelSample).
+        PixelSample* samples = &samples_[static_cast<size_t>(v) * W];
+        fill_samples(in, f, v, samples);
         if (v % stride != 0) continue;
         const float ray_y = rays_.y[v];
         const Eigen::Vector3f row_ray = R_blocks * Eigen::Vector3f(0.0f, ray_y, 1.0f);
         for (int u = 0; u < W; u += stride) {
-          const float z = usable[u];
+          const float z = samples[u].depth;
           if (z == 0.0f) continue;
           ++valid[c];
           // The pixel's point is z * ray (camera frame), at distance z / inv_norm; the band
@@ -550,7 +623,6 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
     // 2. Project every voxel of every touched block (parallel per block).
     const VoxelUpdater updater = make_updater(map, f);
     const bool colour = f.colour && map.has_colour_layer();
-    const float width = static_cast<float>(W), height = static_cast<float>(H);
     std::vector<size_t> updates(touched.blocks.size(), 0);
     // Label-only observations depend on the label alone: one per class, not one per voxel (A6).
     if (bayes && !f.probabilities && !f.confidence)
@@ -559,64 +631,38 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
             ClassDistribution::from_label(static_cast<ClassId>(l), f.default_confidence, f.confusion_classes);
     // Frame constants as locals: the voxel stores (bytes, which may alias anything) would
     // otherwise make every iteration reload them.
-    const float fx = f.fx, fy = f.fy, cx = f.cx, cy = f.cy, min_range = f.min_range, delta = f.delta;
-    const float* usable_depth = usable_depth_.data();
+    const ProjectionFrame frame{f.fx, f.fy, f.cx, f.cy, f.min_range, f.delta, static_cast<float>(W),
+                                static_cast<float>(H), W, samples_.data(), static_cast<int32_t>(static_cast<size_t>(W) * H)};
+    const PixelSample* samples = samples_.data();
     tbb::parallel_for(size_t{0}, touched.blocks.size(), [&](size_t k) {
       Block& block = *touched.blocks[k];
       const Eigen::Vector3f origin = block.index.cast<float>() * block_size + Eigen::Vector3f::Constant(0.5f * f.s);
       const Eigen::Vector3f base = f.R_cw * origin + f.t_cw;
       const Eigen::Vector3f step_x = f.R_cw.col(0) * f.s, step_y = f.R_cw.col(1) * f.s, step_z = f.R_cw.col(2) * f.s;
-      // Pass 1, branch-free: every voxel's pixel (u = -1 when behind the camera or off the image)
-      // and ray geometry; pass 2 then branches only on the voxels that project into the image.
-      std::array<int32_t, kBlockVoxels> voxel_u, voxel_v;
-      std::array<float, kBlockVoxels> voxel_z, voxel_norm, voxel_inv_z;
-      for (int z = 0; z < kBlockSide; ++z)
-        for (int y = 0; y < kBlockSide; ++y) {
-          Eigen::Vector3f pc = base + step_y * static_cast<float>(y) + step_z * static_cast<float>(z);
-          for (int x = 0; x < kBlockSide; ++x, pc += step_x) {
-            const int li = x + kBlockSide * (y + kBlockSide * z);
-            const float inv_z = 1.0f / pc.z();
-            // Nearest pixel: floor(x + 0.5). For x in [0, W) truncation is that floor; the test on
-            // the float (false for NaN too) skips the same pixels as floor(x) outside [0, W).
-            const float x_pix = fx * pc.x() * inv_z + cx + 0.5f, y_pix = fy * pc.y() * inv_z + cy + 0.5f;
-            const bool in_image =
-                pc.z() > min_range && x_pix >= 0.0f && x_pix < width && y_pix >= 0.0f && y_pix < height;
-            voxel_u[li] = in_image ? static_cast<int>(x_pix) : -1;
-            voxel_v[li] = in_image ? static_cast<int>(y_pix) : -1;
-            voxel_z[li] = pc.z();
-            voxel_norm[li] = pc.norm();
-            voxel_inv_z[li] = inv_z;
-          }
-        }
+      // Passes 1-2 branch-free (project, gather, compact), pass 3 updates the listed voxels.
+      BlockHits hits;
+      project_block(base, step_x, step_y, step_z, frame, hits);
       size_t n = 0;
-      for (int li = 0; li < kBlockVoxels; ++li) {
-        const int u = voxel_u[li], v = voxel_v[li];
-        if (u < 0) continue;
-        const size_t pix = static_cast<size_t>(v) * W + u;
-        const float depth = usable_depth[pix];
-        if (depth == 0.0f) continue;
-        const float sdf = (depth - voxel_z[li]) * voxel_norm[li] * voxel_inv_z[li];  // along the ray
-        if (sdf <= -delta) continue;
-        const ClassId label = f.labels ? in.labels.ptr<uint8_t>(v)[u] : 0;
-        ClassDistribution confidence_observation;
+      ClassDistribution confidence_observation;  // outside the loop: not zeroed per voxel
+      for (int j = 0; j < hits.count; ++j) {
+        const int li = hits.voxel[j];
+        const size_t pix = static_cast<size_t>(hits.pixel[li]);
+        const PixelSample& sample = samples[pix];  // in cache since pass 2
+        const float depth = sample.depth, sdf = hits.sdf[li];
+        const ClassId label = sample.label;
         const ClassDistribution* obs = nullptr;
         if (bayes && label != 0) {
           if (f.probabilities) {
             obs = &pixel_observations_[pix];
           } else if (f.confidence) {
-            const float c = std::clamp(in.confidence.ptr<float>(v)[u], 0.01f, 0.999f);
+            const float c = std::clamp(in.confidence.ptr<float>(static_cast<int>(pix / W))[pix % W], 0.01f, 0.999f);
             confidence_observation = ClassDistribution::from_label(label, c, f.confusion_classes);
             obs = &confidence_observation;
           } else {
             obs = &label_observations_[label];
           }
         }
-        Rgb8 rgb;
-        if (colour) {
-          const uint8_t* bgr = in.colour.ptr<uint8_t>(v) + 3 * u;
-          rgb = Rgb8{bgr[2], bgr[1], bgr[0]};
-        }
-        n += updater.update(block, li, sdf, 1.0f / (depth * depth), label, obs, colour ? &rgb : nullptr);
+        n += updater.update(block, li, sdf, 1.0f / (depth * depth), label, obs, colour ? &sample.rgb : nullptr);
       }
       if (n) block.mesh_dirty = true;
       updates[k] = n;
@@ -648,7 +694,8 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
 
   std::vector<std::vector<uint64_t>> chunk_blocks_;
   PixelRays rays_;
-  std::vector<float> usable_depth_;  ///< the frame's depth, 0 where not usable (step 1 -> step 2)
+  /// The frame per pixel (step 1 -> step 2): depth (0 where not usable), colour, label.
+  std::vector<PixelSample> samples_;
   std::vector<ClassDistribution> pixel_observations_;
   std::array<ClassDistribution, kNumClasses> label_observations_;  ///< by label, labels without confidence
 };

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <random>
 #include <unordered_map>
 
@@ -57,6 +58,26 @@ TEST(WeightQuantizer, MonotoneLogScale) {
   }
   EXPECT_EQ(q.encode(1e9f), 255);
   EXPECT_GE(q.encode(1e-9f), 1);  // observed stays observed
+}
+
+// BayesLayerCodec::encode starts from a bucket of the float's top bits; over the floats from
+// the floor to 2 (every 97th bit pattern) it must give the binary search's code.
+TEST(Quantizers, BucketedBayesEncodeEqualsSearch) {
+  for (const double min_p : {1e-5, 1e-3, 0.05}) {
+    const BayesLayerCodec codec(4, min_p);
+    int mismatches = 0;
+    const float lo = static_cast<float>(min_p) * 0.5f, hi = 2.5f;
+    uint32_t bits, end;
+    std::memcpy(&bits, &lo, 4);
+    std::memcpy(&end, &hi, 4);
+    for (; bits < end; bits += 97) {
+      float p;
+      std::memcpy(&p, &bits, 4);
+      const uint8_t expected = p > static_cast<float>(min_p) ? codec.encode_search(p) : 255;
+      mismatches += codec.encode(p) != expected;
+    }
+    EXPECT_EQ(mismatches, 0) << "min_probability " << min_p;
+  }
 }
 
 // The quantisers find codes by a table search (no logarithm per voxel update); the codes must
