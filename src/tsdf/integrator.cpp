@@ -498,45 +498,58 @@ struct ProjectionFrame {
   int32_t off_image;           ///< index of that unusable sample
 };
 
-/// The voxels of one block the frame updates (METHODS B6: a usable pixel, d > -delta), by
-/// local index, with each voxel's pixel and signed distance along the ray.
+/// The voxels of one block the frame updates (METHODS B6: a usable pixel, d > -delta): the
+/// first `count` entries of voxel (local index), pixel and sdf (along the ray). Pass 1's
+/// per-voxel geometry is indexed column-major (y fastest: t = y + 8 (x + 8 z)).
 struct BlockHits {
+  std::array<int32_t, kBlockVoxels> column_pixel;
+  std::array<float, kBlockVoxels> column_z, column_norm, column_inv_z;
   std::array<int32_t, kBlockVoxels> pixel;
-  std::array<float, kBlockVoxels> sdf, z, norm, inv_z;
-  std::array<uint16_t, kBlockVoxels> voxel;  ///< the first `count` are the hits
+  std::array<float, kBlockVoxels> sdf;
+  std::array<uint16_t, kBlockVoxels> voxel;
   int count = 0;
 };
 
-/// Projects the 512 voxels of a block (camera-frame centre of voxel 0 and the per-axis steps),
-/// without branches: pass 1 finds every voxel's pixel (nearest, the unusable off-image sample
-/// when behind the camera or outside), pass 2 reads all their depths with independent loads
-/// (the cache misses overlap instead of serialising behind mispredicted branches) and lists
-/// the voxels to update. Same arithmetic as one branchy loop: same hits and distances.
+/// Projects the 512 voxels of a block (camera-frame centre of voxel 0 and the per-axis steps)
+/// without branches. Pass 1 finds every voxel's pixel (nearest; the unusable off-image sample
+/// when behind the camera or outside) 8 voxels at a time: the 8 rows y of a block column, each
+/// lane stepping along x by + step_x as one voxel-row loop would (the same float operations,
+/// so the same pixels and distances, now vectorised). Pass 2 reads all their depths with
+/// independent loads (the cache misses overlap instead of serialising behind mispredicted
+/// branches) and lists the voxels to update.
 inline void project_block(const Eigen::Vector3f& base, const Eigen::Vector3f& step_x, const Eigen::Vector3f& step_y,
                           const Eigen::Vector3f& step_z, const ProjectionFrame& f, BlockHits& h) {
-  for (int z = 0; z < kBlockSide; ++z)
+  const float sx = step_x.x(), sy = step_x.y(), sz = step_x.z();
+  for (int z = 0; z < kBlockSide; ++z) {
+    std::array<float, kBlockSide> px, py, pz;  // camera-frame voxel centres of column x, by y
     for (int y = 0; y < kBlockSide; ++y) {
-      Eigen::Vector3f pc = base + step_y * static_cast<float>(y) + step_z * static_cast<float>(z);
-      for (int x = 0; x < kBlockSide; ++x, pc += step_x) {
-        const int li = x + kBlockSide * (y + kBlockSide * z);
-        const float inv_z = 1.0f / pc.z();
+      const Eigen::Vector3f row = base + step_y * static_cast<float>(y) + step_z * static_cast<float>(z);
+      px[y] = row.x(), py[y] = row.y(), pz[y] = row.z();
+    }
+    for (int x = 0; x < kBlockSide; ++x) {
+      const int t0 = kBlockSide * (x + kBlockSide * z);
+      for (int y = 0; y < kBlockSide; ++y) {
+        const float cz = pz[y], inv_z = 1.0f / cz;
         // Nearest pixel: floor(x + 0.5). For x in [0, W) truncation is that floor; the test on
         // the float (false for NaN too) skips the same pixels as floor(x) outside [0, W).
-        const float x_pix = f.fx * pc.x() * inv_z + f.cx + 0.5f, y_pix = f.fy * pc.y() * inv_z + f.cy + 0.5f;
-        const bool in_image =
-            pc.z() > f.min_range && x_pix >= 0.0f && x_pix < f.width && y_pix >= 0.0f && y_pix < f.height;
-        h.pixel[li] = in_image ? static_cast<int>(y_pix) * f.width_px + static_cast<int>(x_pix) : f.off_image;
-        h.z[li] = pc.z();
-        h.norm[li] = pc.norm();
-        h.inv_z[li] = inv_z;
+        const float x_pix = f.fx * px[y] * inv_z + f.cx + 0.5f, y_pix = f.fy * py[y] * inv_z + f.cy + 0.5f;
+        const bool in_image = (cz > f.min_range) & (x_pix >= 0.0f) & (x_pix < f.width) & (y_pix >= 0.0f) & (y_pix < f.height);
+        h.column_pixel[t0 + y] = in_image ? static_cast<int>(y_pix) * f.width_px + static_cast<int>(x_pix) : f.off_image;
+        h.column_z[t0 + y] = cz;
+        h.column_norm[t0 + y] = std::sqrt(px[y] * px[y] + (py[y] * py[y] + cz * cz));  // Eigen's norm() order
+        h.column_inv_z[t0 + y] = inv_z;
+        px[y] += sx, py[y] += sy, pz[y] += sz;
       }
     }
+  }
   int n = 0;
-  for (int li = 0; li < kBlockVoxels; ++li) {
-    const float depth = f.samples[h.pixel[li]].depth;
-    const float sdf = (depth - h.z[li]) * h.norm[li] * h.inv_z[li];  // along the ray
-    h.sdf[li] = sdf;
-    h.voxel[n] = static_cast<uint16_t>(li);
+  for (int t = 0; t < kBlockVoxels; ++t) {
+    const int32_t pixel = h.column_pixel[t];
+    const float depth = f.samples[pixel].depth;
+    const float sdf = (depth - h.column_z[t]) * h.column_norm[t] * h.column_inv_z[t];  // along the ray
+    h.pixel[n] = pixel;
+    h.sdf[n] = sdf;
+    h.voxel[n] = static_cast<uint16_t>(((t >> 3) & 7) | ((t & 7) << 3) | (t & ~63));  // x + 8 y + 64 z
     n += depth != 0.0f && !(sdf <= -f.delta);
   }
   h.count = n;
@@ -646,9 +659,9 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
       ClassDistribution confidence_observation;  // outside the loop: not zeroed per voxel
       for (int j = 0; j < hits.count; ++j) {
         const int li = hits.voxel[j];
-        const size_t pix = static_cast<size_t>(hits.pixel[li]);
+        const size_t pix = static_cast<size_t>(hits.pixel[j]);
         const PixelSample& sample = samples[pix];  // in cache since pass 2
-        const float depth = sample.depth, sdf = hits.sdf[li];
+        const float depth = sample.depth, sdf = hits.sdf[j];
         const ClassId label = sample.label;
         const ClassDistribution* obs = nullptr;
         if (bayes && label != 0) {
