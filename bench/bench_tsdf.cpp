@@ -1,4 +1,5 @@
-// bench_tsdf: our TSDF integrators against Open3D's ScalableTSDFVolume on the SAME frames in one
+// bench_tsdf: our TSDF integrators against Open3D's ScalableTSDFVolume and its tensor
+// t::geometry::VoxelBlockGrid (CPU; what current Open3D users run) on the SAME frames in one
 // process (tum_fr1_rpy with ground-truth poses, and a synthetic sequence), 2 threads each, at
 // 1, 2 and 5 cm. Prints JSON: ms/frame, ratio Open3D/ours, bytes per allocated voxel, mesh
 // extraction time, and the block hash table against std::unordered_map (METHODS B4).
@@ -35,6 +36,9 @@
 #include <open3d/geometry/TriangleMesh.h>
 #include <open3d/pipelines/integration/ScalableTSDFVolume.h>
 #include <open3d/pipelines/integration/UniformTSDFVolume.h>
+#include <open3d/t/geometry/Image.h>
+#include <open3d/t/geometry/TriangleMesh.h>
+#include <open3d/t/geometry/VoxelBlockGrid.h>
 #endif
 
 using namespace semap;
@@ -217,6 +221,66 @@ struct Open3DRunner : Runner {
     return j;
   }
 };
+
+/// Open3D's tensor VoxelBlockGrid on the CPU, as its TSDF examples configure it (tsdf Float32,
+/// weight and colour UInt16, 16^3 blocks) and fed as they read TUM: uint16 depth (TUM's 1/5000 m
+/// units, exactly the dataset's values) and uint8 RGB. Timed: block selection + integration.
+struct Open3DVoxelBlockGridRunner : Runner {
+  static constexpr float kDepthScale = 5000.0f;
+  std::unique_ptr<open3d::t::geometry::VoxelBlockGrid> vbg;
+  open3d::core::Tensor intrinsic;
+  float depth_max;
+  Open3DVoxelBlockGridRunner(const PinholeIntrinsics& K, double voxel, double max_depth) : depth_max(static_cast<float>(max_depth)) {
+    namespace core = open3d::core;
+    name = "open3d_voxel_block_grid";
+    vbg = std::make_unique<open3d::t::geometry::VoxelBlockGrid>(
+        std::vector<std::string>{"tsdf", "weight", "color"}, std::vector<core::Dtype>{core::Float32, core::UInt16, core::UInt16},
+        std::vector<core::SizeVector>{{1}, {1}, {3}}, static_cast<float>(voxel), 16, 50000, core::Device("CPU:0"));
+    intrinsic = core::Tensor::Init<double>({{K.fx, 0, K.cx}, {0, K.fy, K.cy}, {0, 0, 1}});
+  }
+  void integrate(const IntegrationInput& f) override {
+    namespace core = open3d::core;
+    const int H = f.depth.rows, W = f.depth.cols;
+    core::Tensor depth({H, W, 1}, core::UInt16), colour({H, W, 3}, core::UInt8);
+    auto* d = depth.GetDataPtr<uint16_t>();
+    auto* c = colour.GetDataPtr<uint8_t>();
+    for (int v = 0; v < H; ++v)
+      for (int u = 0; u < W; ++u) {
+        const float z = f.depth.at<float>(v, u);
+        d[static_cast<size_t>(v) * W + u] = std::isfinite(z) && z > 0 ? static_cast<uint16_t>(std::lround(z * kDepthScale)) : 0;
+        const cv::Vec3b bgr = f.colour.at<cv::Vec3b>(v, u);
+        uint8_t* rgb = c + 3 * (static_cast<size_t>(v) * W + u);
+        rgb[0] = bgr[2], rgb[1] = bgr[1], rgb[2] = bgr[0];
+      }
+    const open3d::t::geometry::Image depth_image(depth), colour_image(colour);
+    const Eigen::Matrix4d T_cw = f.T_world_camera.inverse().matrix();
+    core::Tensor extrinsic({4, 4}, core::Float64);
+    for (int r = 0; r < 4; ++r)
+      for (int k = 0; k < 4; ++k) extrinsic[r][k] = T_cw(r, k);
+    const double c0 = cpu_ms();
+    const auto t0 = Clock::now();
+    const core::Tensor blocks = vbg->GetUniqueBlockCoordinates(depth_image, intrinsic, extrinsic, kDepthScale, depth_max, 4.0f);
+    vbg->Integrate(blocks, depth_image, colour_image, intrinsic, extrinsic, kDepthScale, depth_max, 4.0f);
+    wall_ms += ms_since(t0);
+    cpu_ms_total += cpu_ms() - c0;
+  }
+  nlohmann::json finish(int) override {
+    const auto t0 = Clock::now();
+    const auto mesh = vbg->ExtractTriangleMesh(0.0f);
+    const double mesh_ms = ms_since(t0);
+    const size_t blocks = vbg->GetHashMap().Size();
+    constexpr size_t kVoxelBytes = 4 + 2 + 3 * 2;  // tsdf Float32, weight UInt16, colour 3 x UInt16
+    nlohmann::json j;
+    j["variant"] = name;
+    j["blocks"] = blocks;
+    j["allocated_voxels"] = blocks * 16 * 16 * 16;
+    j["bytes_per_voxel_layers"] = kVoxelBytes;
+    j["memory_mb"] = blocks * 16 * 16 * 16 * kVoxelBytes / 1e6;
+    j["mesh_ms"] = mesh_ms;
+    j["mesh_triangles"] = mesh.HasTriangleIndices() ? mesh.GetTriangleIndices().GetLength() : 0;
+    return j;
+  }
+};
 #endif
 
 nlohmann::json hash_benchmark(const TsdfMap& map) {
@@ -339,12 +403,16 @@ int main(int argc, char** argv) {
       if (auto set_threads = reinterpret_cast<void (*)(int)>(dlsym(RTLD_DEFAULT, "omp_set_num_threads")))
         set_threads(threads);  // Open3D's OpenMP (libgomp, loaded with Open3D), without linking it here
       runners.push_back(std::make_unique<Open3DRunner>(seq.K, voxel));
+      runners.push_back(std::make_unique<Open3DVoxelBlockGridRunner>(seq.K, voxel, 4.0));
 #endif
       for (const IntegrationInput& frame : seq.frames)
         for (auto& r : runners) r->integrate(frame);
       const double n = static_cast<double>(seq.frames.size());
       nlohmann::json jv = nlohmann::json::array();
-      const Runner& o3d = *runners.back();
+#ifdef SEMAP_HAVE_OPEN3D
+      const Runner& o3d = *runners[runners.size() - 2];  // ScalableTSDFVolume
+      const Runner& vbg = *runners.back();               // VoxelBlockGrid
+#endif
       for (auto& r : runners) {
         nlohmann::json j = r->finish(threads);
         j["ms_per_frame"] = r->wall_ms / n;
@@ -352,12 +420,13 @@ int main(int argc, char** argv) {
 #ifdef SEMAP_HAVE_OPEN3D
         j["ratio_open3d_over_ours"] = o3d.wall_ms / r->wall_ms;
         j["cpu_ratio_open3d_over_ours"] = o3d.cpu_ms_total / r->cpu_ms_total;
+        j["ratio_open3d_vbg_over_ours"] = vbg.wall_ms / r->wall_ms;
+        j["cpu_ratio_open3d_vbg_over_ours"] = vbg.cpu_ms_total / r->cpu_ms_total;
 #endif
         std::cerr << seq.name << " " << voxel << " " << r->name << " " << j["ms_per_frame"] << " ms/frame, cpu "
                   << j["cpu_ms_per_frame"] << " ms/frame\n";
         jv.push_back(j);
       }
-      (void)o3d;
       if (seq.name == "tum_fr1_rpy" && voxel == 0.02 && !variants.empty() && variants[0].name == "ours_projective_core")
         out["block_hash"] = hash_benchmark(static_cast<OursRunner&>(*runners[0]).tsdf->map());
       std::ostringstream key;
