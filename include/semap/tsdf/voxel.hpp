@@ -53,6 +53,20 @@ inline float half_to_float(uint16_t h) {
   return f;
 }
 
+/// The same conversions by the compiler's _Float16: F16C instructions where the calling
+/// function is built for them (the integrator's AVX2 path), library code elsewhere.
+[[gnu::always_inline]] inline uint16_t native_float_to_half(float value) {
+  const _Float16 h = static_cast<_Float16>(value);
+  uint16_t bits;
+  std::memcpy(&bits, &h, 2);
+  return bits;
+}
+[[gnu::always_inline]] inline float native_half_to_float(uint16_t bits) {
+  _Float16 h;
+  std::memcpy(&h, &bits, 2);
+  return static_cast<float>(h);
+}
+
 // ---- core voxel (METHODS B3) ----
 
 /// 4 bytes: fp16 signed distance (metres), u8 log-quantised weight (WeightQuantizer), u8 label.
