@@ -258,6 +258,29 @@ class GroupedIntegrator final : public ArenaIntegrator {
     float d;
     int32_t group;
   };
+  /// A RayUpdate bucketed by block: the voxel by its local index.
+  struct BlockUpdate {
+    float d;
+    int32_t group;
+    uint16_t li;
+  };
+  /// What a voxel update reads of its ray (group), 8 bytes: the apply loop's reads of the
+  /// 100-byte groups were its cache misses.
+  struct RayInfo {
+    float weight;
+    Rgb8 colour;
+    ClassId label;
+  };
+  /// What the per-block apply step of one frame reads.
+  struct ApplyPass {
+    const VoxelUpdater& updater;
+    const BlockUpdate* updates;
+    const size_t* offsets;
+    const RayInfo* rays;
+    const Group* groups;
+    float label_band;
+    bool labels, colour, observation;
+  };
 
   void run(TsdfMap& map, const IntegrationInput& in, const FrameSetup& f) override {
     const int W = f.width, H = f.height;
@@ -354,6 +377,8 @@ class GroupedIntegrator final : public ArenaIntegrator {
       }
     }
     if (want_observation && f.probabilities) group_probabilities(in, f, map.bayes().k());
+    ray_info_.resize(groups_.size());
+    for (size_t g = 0; g < groups_.size(); ++g) ray_info_[g] = RayInfo{groups_[g].total_weight, groups_[g].colour, groups_[g].label};
     // 4. Cast one ray per group through the truncation band (parallel in fixed chunks).
     constexpr size_t kChunk = 512;
     const size_t n_chunks = (groups_.size() + kChunk - 1) / kChunk;
@@ -384,6 +409,7 @@ class GroupedIntegrator final : public ArenaIntegrator {
     size_t n_updates = 0;
     for (const auto& v : chunk_updates_) n_updates += v.size();
     update_block_.resize(n_updates);
+    offsets_.assign(1, 0);  // offsets_[slot + 1]: updates of the block, then their prefix sums
     size_t i = 0;
     BlockIndex last_block(INT32_MIN, INT32_MIN, INT32_MIN);
     int32_t last_slot = -1;
@@ -393,52 +419,72 @@ class GroupedIntegrator final : public ArenaIntegrator {
         if (b != last_block) {
           last_slot = touched.touch(map, b);
           last_block = b;
+          if (static_cast<size_t>(last_slot) + 1 == offsets_.size()) offsets_.push_back(0);
         }
+        ++offsets_[last_slot + 1];
         update_block_[i++] = last_slot;
       }
     const size_t n_blocks = touched.blocks.size();
-    offsets_.assign(n_blocks + 1, 0);
-    for (size_t k = 0; k < n_updates; ++k) ++offsets_[update_block_[k] + 1];
     for (size_t k = 0; k < n_blocks; ++k) offsets_[k + 1] += offsets_[k];
-    order_.resize(n_updates);
+    sorted_.resize(n_updates);
     {
       std::vector<size_t> cursor(offsets_.begin(), offsets_.end() - 1);
       size_t k = 0;
       for (const auto& chunk : chunk_updates_)
-        for (const RayUpdate& u : chunk) order_[cursor[update_block_[k++]]++] = &u;
+        for (const RayUpdate& u : chunk)
+          sorted_[cursor[update_block_[k++]]++] = BlockUpdate{u.d, u.group, static_cast<uint16_t>(local_index(u.voxel))};
     }
     // 6. Apply per block in parallel (each block's updates in ray order: deterministic).
     const VoxelUpdater updater = make_updater(map, f);
-    const bool colour = f.colour && map.has_colour_layer();
-    const bool labels = f.labels && (map.has_label_layer() || map.has_bayes_layer());
+    const ApplyPass pass{updater,
+                         sorted_.data(),
+                         offsets_.data(),
+                         ray_info_.data(),
+                         groups_.data(),
+                         f.label_band,
+                         f.labels && (map.has_label_layer() || map.has_bayes_layer()),
+                         f.colour && map.has_colour_layer(),
+                         want_observation};
+    static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("f16c");
     tbb::parallel_for(size_t{0}, n_blocks, [&](size_t k) {
       Block& block = *touched.blocks[k];
-      // Labels: one observation per voxel per frame, from the ray whose surface point is nearest.
-      std::array<float, kBlockVoxels> best_d;
-      std::array<int32_t, kBlockVoxels> best_group;
-      if (labels) best_group.fill(-1);
-      for (size_t j = offsets_[k]; j < offsets_[k + 1]; ++j) {
-        const RayUpdate& u = *order_[j];
-        const Group& g = groups_[u.group];
-        const int li = local_index(u.voxel);
-        if (!updater.update(block, li, u.d, g.total_weight, 0, nullptr, colour ? &g.colour : nullptr)) continue;
-        if (labels && g.label != 0 && std::fabs(u.d) <= f.label_band &&
-            (best_group[li] < 0 || std::fabs(u.d) < best_d[li])) {
-          best_group[li] = u.group;
-          best_d[li] = std::fabs(u.d);
-        }
-      }
-      if (labels)
-        for (int li = 0; li < kBlockVoxels; ++li)
-          if (best_group[li] >= 0) {
-            const Group& g = groups_[best_group[li]];
-            updater.update_labels(block, li, g.label, want_observation ? &g.observation : nullptr);
-          }
+      if (avx2) apply_block_avx2(block, k, pass);
+      else apply_block_sse2(block, k, pass);
       block.mesh_dirty = true;
     });
     stats_.voxel_updates = n_updates;
     stats_.touched_blocks = n_blocks;
     stats_.allocated_blocks = touched.allocated;
+  }
+
+  /// B6 for the updates of block k in ray order, then one label observation per voxel, from the
+  /// ray whose surface point is nearest.
+  template <bool kNativeHalf>
+  [[gnu::always_inline]] static void apply_block(Block& block, size_t k, const ApplyPass& p) {
+    std::array<float, kBlockVoxels> best_d;
+    std::array<int32_t, kBlockVoxels> best_group;
+    if (p.labels) best_group.fill(-1);
+    for (size_t j = p.offsets[k]; j < p.offsets[k + 1]; ++j) {
+      const BlockUpdate& u = p.updates[j];
+      const RayInfo& ray = p.rays[u.group];
+      const int li = u.li;
+      if (!p.updater.update<kNativeHalf>(block, li, u.d, ray.weight, 0, nullptr, p.colour ? &ray.colour : nullptr)) continue;
+      if (p.labels && ray.label != 0 && std::fabs(u.d) <= p.label_band && (best_group[li] < 0 || std::fabs(u.d) < best_d[li])) {
+        best_group[li] = u.group;
+        best_d[li] = std::fabs(u.d);
+      }
+    }
+    if (p.labels)
+      for (int li = 0; li < kBlockVoxels; ++li)
+        if (best_group[li] >= 0) {
+          const Group& g = p.groups[best_group[li]];
+          p.updater.update_labels(block, li, g.label, p.observation ? &g.observation : nullptr);
+        }
+  }
+  /// Baseline and AVX2+F16C builds, as the projective integrator's integrate_block_*.
+  static void apply_block_sse2(Block& block, size_t k, const ApplyPass& p) { apply_block<false>(block, k, p); }
+  [[gnu::target("avx2,f16c")]] static void apply_block_avx2(Block& block, size_t k, const ApplyPass& p) {
+    apply_block<true>(block, k, p);
   }
 
   /// Bayesian observation of a group from per-pixel probabilities: the weighted mean
@@ -467,7 +513,8 @@ class GroupedIntegrator final : public ArenaIntegrator {
   std::vector<std::vector<RayUpdate>> chunk_updates_;
   std::vector<int32_t> update_block_;
   std::vector<size_t> offsets_;
-  std::vector<const RayUpdate*> order_;
+  std::vector<BlockUpdate> sorted_;
+  std::vector<RayInfo> ray_info_;
 };
 
 // =============================================================================================
