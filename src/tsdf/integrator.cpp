@@ -5,6 +5,9 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <emmintrin.h>
+
+#include <array>
 #include <cmath>
 
 #include "semap/core/error.hpp"
@@ -144,22 +147,27 @@ void traverse_cells(const Eigen::Vector3f& pa, const Eigen::Vector3f& pb, Visit&
     return;
   }
   const Eigen::Vector3f dir = pb - pa;
-  Eigen::Vector3i step;
-  Eigen::Vector3f t_max, t_delta;
+  std::array<int, 3> cell{c.x(), c.y(), c.z()}, step;
+  alignas(16) std::array<float, 4> t_max, t_delta, num{0, 0, 0, 0}, den{1, 1, 1, 1}, sign{0, 0, 0, 0};
   for (int i = 0; i < 3; ++i) {
     step[i] = dir[i] > 0 ? 1 : (dir[i] < 0 ? -1 : 0);
-    if (step[i] == 0) {
-      t_max[i] = t_delta[i] = std::numeric_limits<float>::infinity();
-    } else {
-      const float boundary = static_cast<float>(c[i] + (step[i] > 0 ? 1 : 0));
-      t_max[i] = (boundary - pa[i]) / dir[i];
-      t_delta[i] = static_cast<float>(step[i]) / dir[i];
-    }
+    num[i] = static_cast<float>(c[i] + (step[i] > 0 ? 1 : 0)) - pa[i];  // to the first boundary
+    den[i] = dir[i];
+    sign[i] = static_cast<float>(step[i]);
   }
+  // The six divisions as two 4-lane ones (the same IEEE quotients); axes without motion never step.
+  const __m128 d = _mm_load_ps(den.data());
+  _mm_store_ps(t_max.data(), _mm_div_ps(_mm_load_ps(num.data()), d));
+  _mm_store_ps(t_delta.data(), _mm_div_ps(_mm_load_ps(sign.data()), d));
+  for (int i = 0; i < 3; ++i)
+    if (step[i] == 0) t_max[i] = t_delta[i] = std::numeric_limits<float>::infinity();
+  // The axis of the smallest t_max (ties: as x < y ? (x < z ? x : z) : (y < z ? y : z)), by table:
+  // the choice is data-dependent, a branch on it mispredicts.
+  static constexpr std::array<int8_t, 8> kAxis = {2, 2, 2, 0, 1, 2, 1, 0};  // [x<y | x<z << 1 | y<z << 2]
   for (int i = 0; i < n; ++i) {
-    visit(c);
-    int axis = t_max.x() < t_max.y() ? (t_max.x() < t_max.z() ? 0 : 2) : (t_max.y() < t_max.z() ? 1 : 2);
-    c[axis] += step[axis];
+    visit(Eigen::Vector3i(cell[0], cell[1], cell[2]));
+    const int axis = kAxis[(t_max[0] < t_max[1]) | (t_max[0] < t_max[2]) << 1 | (t_max[1] < t_max[2]) << 2];
+    cell[axis] += step[axis];
     t_max[axis] += t_delta[axis];
   }
 }
@@ -168,7 +176,10 @@ void traverse_cells(const Eigen::Vector3f& pa, const Eigen::Vector3f& pb, Visit&
 constexpr int kKeyBits = 21;
 constexpr int32_t kKeyOffset = 1 << (kKeyBits - 1);
 inline bool key_in_range(const Eigen::Vector3i& v) {
-  return (v.array() >= -kKeyOffset).all() && (v.array() < kKeyOffset).all();
+  // Each offset coordinate within [0, 2^kKeyBits), as unsigned: one test for all three.
+  const uint32_t x = static_cast<uint32_t>(v.x() + kKeyOffset), y = static_cast<uint32_t>(v.y() + kKeyOffset),
+                 z = static_cast<uint32_t>(v.z() + kKeyOffset);
+  return ((x | y | z) >> kKeyBits) == 0;
 }
 inline uint64_t pack_key(const Eigen::Vector3i& v) {
   return static_cast<uint64_t>(v.x() + kKeyOffset) | (static_cast<uint64_t>(v.y() + kKeyOffset) << kKeyBits) |
@@ -710,7 +721,7 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
           traverse_cells(a, b, [&](const Eigen::Vector3i& blk) {
             if (!key_in_range(blk)) return;
             const uint64_t key = pack_key(blk);
-            uint64_t& r = recent[mix_key(key) & 63];
+            uint64_t& r = recent[(key * 0x9E3779B97F4A7C15ULL) >> 58];  // any hash: first sightings are kept
             if (r == key) return;
             r = key;
             out.push_back(key);
