@@ -122,6 +122,12 @@ VoxelUpdater make_updater(const TsdfMap& map, const FrameSetup& f) {
                       map.has_label_layer(), map.has_bayes_layer(), map.has_colour_layer()};
 }
 
+/// Whether this CPU runs the integrators' AVX2 + F16C builds (checked once).
+bool have_avx2_f16c() {
+  static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("f16c");
+  return yes;
+}
+
 int arena_threads(const TsdfConfig& cfg) { return cfg.threads > 0 ? cfg.threads : tbb::info::default_concurrency(); }
 
 /// floor(p) per axis as cell indices: the truncating cast, one lower for negative non-integers.
@@ -135,17 +141,9 @@ inline Eigen::Vector3i floor_cells(const Eigen::Vector3f& p) {
   return c;
 }
 
-/// Amanatides-Woo traversal of the unit cells crossed by segment pa -> pb (in cell units).
+/// The stepping part of traverse_cells: the n cells from c = floor(pa) along pa -> pb.
 template <class Visit>
-void traverse_cells(const Eigen::Vector3f& pa, const Eigen::Vector3f& pb, Visit&& visit) {
-  Eigen::Vector3i c = floor_cells(pa);
-  const Eigen::Vector3i end = floor_cells(pb);
-  const int n = 1 + std::abs(end.x() - c.x()) + std::abs(end.y() - c.y()) + std::abs(end.z() - c.z());
-  if (n <= 2) {  // the common short segment: its end cells are all it crosses, no stepping needed
-    visit(c);
-    if (n == 2) visit(end);
-    return;
-  }
+void traverse_steps(const Eigen::Vector3f& pa, const Eigen::Vector3f& pb, const Eigen::Vector3i& c, int n, Visit&& visit) {
   const Eigen::Vector3f dir = pb - pa;
   std::array<int, 3> cell{c.x(), c.y(), c.z()}, step;
   alignas(16) std::array<float, 4> t_max, t_delta, num{0, 0, 0, 0}, den{1, 1, 1, 1}, sign{0, 0, 0, 0};
@@ -170,6 +168,20 @@ void traverse_cells(const Eigen::Vector3f& pa, const Eigen::Vector3f& pb, Visit&
     cell[axis] += step[axis];
     t_max[axis] += t_delta[axis];
   }
+}
+
+/// Amanatides-Woo traversal of the unit cells crossed by segment pa -> pb (in cell units).
+template <class Visit>
+void traverse_cells(const Eigen::Vector3f& pa, const Eigen::Vector3f& pb, Visit&& visit) {
+  Eigen::Vector3i c = floor_cells(pa);
+  const Eigen::Vector3i end = floor_cells(pb);
+  const int n = 1 + std::abs(end.x() - c.x()) + std::abs(end.y() - c.y()) + std::abs(end.z() - c.z());
+  if (n <= 2) {  // the common short segment: its end cells are all it crosses, no stepping needed
+    visit(c);
+    if (n == 2) visit(end);
+    return;
+  }
+  traverse_steps(pa, pb, c, n, visit);
 }
 
 // Group keys: 21 bits per axis (voxel indices within +-2^20).
@@ -451,7 +463,7 @@ class GroupedIntegrator final : public ArenaIntegrator {
                          f.labels && (map.has_label_layer() || map.has_bayes_layer()),
                          f.colour && map.has_colour_layer(),
                          want_observation};
-    static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("f16c");
+    const bool avx2 = have_avx2_f16c();
     tbb::parallel_for(size_t{0}, n_blocks, [&](size_t k) {
       Block& block = *touched.blocks[k];
       if (avx2) apply_block_avx2(block, k, pass);
@@ -569,6 +581,82 @@ void fill_samples(const IntegrationInput& in, const FrameSetup& f, int v, PixelS
   }
   const uint8_t* labels = f.labels ? in.labels.ptr<uint8_t>(v) : nullptr;
   for (int u = 0; u < f.width; ++u) out[u].label = labels ? labels[u] : 0;
+}
+
+/// One image row for projective step 1 (block units): its samples, the camera rays' x per
+/// column and 1/norm per pixel, the row's ray at x = 0, the ray step per unit x, the camera.
+struct BandRow {
+  const PixelSample* samples;
+  const float* ray_x;
+  const float* inv_norm;
+  Eigen::Vector3f row_ray, col0, t_blocks;
+  float delta;
+  int width, stride;
+};
+using RecentKeys = std::array<uint64_t, 64>;  ///< direct-mapped: keys seen lately
+
+/// Appends the keys of the blocks crossed by the truncation bands of the row's strided usable
+/// pixels (first sightings per `recent`); returns those pixels' number. The band ends of 8
+/// pixels are computed per step, lane by lane as the per-pixel Eigen expressions (same float
+/// operations: same cells), then each pixel's cells are visited.
+template <bool kWide>
+[[gnu::always_inline]] inline size_t band_blocks(const BandRow& r, RecentKeys& recent, std::vector<uint64_t>& out) {
+  constexpr int kLanes = 8;
+  auto visit = [&](const Eigen::Vector3i& blk) {
+    if (!key_in_range(blk)) return;
+    const uint64_t key = pack_key(blk);
+    uint64_t& seen = recent[(key * 0x9E3779B97F4A7C15ULL) >> 58];  // any hash: first sightings are kept
+    if (seen == key) return;
+    seen = key;
+    out.push_back(key);
+  };
+  size_t valid = 0;
+  for (int u0 = 0; u0 < r.width; u0 += kLanes * r.stride) {
+    std::array<float, kLanes> z, x, inv_norm;
+    for (int l = 0; l < kLanes; ++l) {
+      const int u = u0 + l * r.stride;
+      const int uc = u < r.width ? u : 0;
+      z[l] = u < r.width ? r.samples[uc].depth : 0.0f;
+      x[l] = r.ray_x[uc];
+      inv_norm[l] = r.inv_norm[uc];
+    }
+    std::array<float, kLanes> a[3], b[3];
+    std::array<int, kLanes> ca[3], cb[3], n;
+    for (int l = 0; l < kLanes; ++l) {
+      // The pixel's point is z * ray (camera frame), at distance z / inv_norm; the band
+      // [dist - delta, dist + delta] along the ray, in block units (no division per pixel).
+      const float band = r.delta * inv_norm[l], near = z[l] - band, far = z[l] + band;
+      const float s_near = 0.0f < near ? near : 0.0f;  // std::max(0, near)
+      n[l] = 1;
+      for (int i = 0; i < 3; ++i) {
+        const float ray = r.row_ray[i] + r.col0[i] * x[l];
+        a[i][l] = r.t_blocks[i] + ray * s_near;
+        b[i][l] = r.t_blocks[i] + ray * far;
+        const int ta = static_cast<int>(a[i][l]), tb = static_cast<int>(b[i][l]);  // floor_cells
+        ca[i][l] = ta - (a[i][l] < static_cast<float>(ta) ? 1 : 0);
+        cb[i][l] = tb - (b[i][l] < static_cast<float>(tb) ? 1 : 0);
+        n[l] += std::abs(cb[i][l] - ca[i][l]);
+      }
+    }
+    for (int l = 0; l < kLanes; ++l) {
+      if (z[l] == 0.0f) continue;
+      ++valid;
+      const Eigen::Vector3i c(ca[0][l], ca[1][l], ca[2][l]);
+      if (n[l] <= 2) {  // as traverse_cells: the end cells are all a short segment crosses
+        visit(c);
+        if (n[l] == 2) visit(Eigen::Vector3i(cb[0][l], cb[1][l], cb[2][l]));
+      } else {
+        traverse_steps(Eigen::Vector3f(a[0][l], a[1][l], a[2][l]), Eigen::Vector3f(b[0][l], b[1][l], b[2][l]), c, n[l], visit);
+      }
+    }
+  }
+  return valid;
+}
+size_t band_blocks_sse2(const BandRow& r, RecentKeys& recent, std::vector<uint64_t>& out) {
+  return band_blocks<false>(r, recent, out);
+}
+[[gnu::target("avx2,f16c")]] size_t band_blocks_avx2(const BandRow& r, RecentKeys& recent, std::vector<uint64_t>& out) {
+  return band_blocks<true>(r, recent, out);
 }
 
 /// Frame constants of the voxel projection, as values (voxel stores, bytes that may alias
@@ -713,11 +801,12 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
     const Eigen::Matrix3f R_blocks = f.R_wc / block_size;  // camera -> world, in block units
     const Eigen::Vector3f t_blocks = f.t_wc / block_size;
     std::vector<size_t> valid(n_chunks, 0);
+    const bool avx2 = have_avx2_f16c();
     tbb::parallel_for(0, n_chunks, [&](int c) {
       std::vector<uint64_t>& out = chunk_blocks_[c];
       out.clear();
       // Small direct-mapped cache to skip repeated keys of neighbouring pixels.
-      std::array<uint64_t, 64> recent;
+      RecentKeys recent;
       recent.fill(~0ULL);
       for (int v = c * kRowsPerChunk; v < std::min(H, (c + 1) * kRowsPerChunk); ++v) {
         // Every row, in one sequential pass: the depth (0 = unusable), colour and label that
@@ -725,27 +814,16 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
         PixelSample* samples = &samples_[static_cast<size_t>(v) * W];
         fill_samples(in, f, v, samples);
         if (v % stride != 0) continue;
-        const float ray_y = rays_.y[v];
-        const Eigen::Vector3f row_ray = R_blocks * Eigen::Vector3f(0.0f, ray_y, 1.0f);
-        for (int u = 0; u < W; u += stride) {
-          const float z = samples[u].depth;
-          if (z == 0.0f) continue;
-          ++valid[c];
-          // The pixel's point is z * ray (camera frame), at distance z / inv_norm; the band
-          // [dist - delta, dist + delta] along the ray, in block units (no division per pixel).
-          const Eigen::Vector3f ray = row_ray + R_blocks.col(0) * rays_.x[u];
-          const float band = f.delta * rays_.inv_norm[static_cast<size_t>(v) * W + u];
-          const Eigen::Vector3f a = t_blocks + ray * std::max(0.0f, z - band);
-          const Eigen::Vector3f b = t_blocks + ray * (z + band);
-          traverse_cells(a, b, [&](const Eigen::Vector3i& blk) {
-            if (!key_in_range(blk)) return;
-            const uint64_t key = pack_key(blk);
-            uint64_t& r = recent[(key * 0x9E3779B97F4A7C15ULL) >> 58];  // any hash: first sightings are kept
-            if (r == key) return;
-            r = key;
-            out.push_back(key);
-          });
-        }
+        const BandRow row{samples,
+                          rays_.x.data(),
+                          &rays_.inv_norm[static_cast<size_t>(v) * W],
+                          R_blocks * Eigen::Vector3f(0.0f, rays_.y[v], 1.0f),
+                          R_blocks.col(0),
+                          t_blocks,
+                          f.delta,
+                          W,
+                          stride};
+        valid[c] += avx2 ? band_blocks_avx2(row, recent, out) : band_blocks_sse2(row, recent, out);
       }
     });
     TouchedBlocks touched;
@@ -786,7 +864,6 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
                                 static_cast<float>(H), W, samples_.data(), static_cast<int32_t>(static_cast<size_t>(W) * H)};
     const BlockPass pass{updater, frame, f, in, label_observations_.data(),
                          bayes && f.probabilities ? pixel_observations_.data() : nullptr, block_size, bayes, colour};
-    static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("f16c");
     tbb::parallel_for(size_t{0}, touched.blocks.size(), [&](size_t k) {
       Block& block = *touched.blocks[k];
       const size_t n = avx2 ? integrate_block_avx2(block, pass) : integrate_block_sse2(block, pass);
