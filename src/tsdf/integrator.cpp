@@ -5,7 +5,14 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#if defined(__x86_64__) || defined(__i386__)
 #include <emmintrin.h>
+#define SEMAP_TSDF_X86 1
+// The integrators' per-block work is also built for AVX2 + F16C, chosen at run time.
+#define SEMAP_TARGET_AVX2 [[gnu::target("avx2,f16c")]]
+#else
+#define SEMAP_TARGET_AVX2
+#endif
 
 #include <array>
 #include <cmath>
@@ -124,8 +131,12 @@ VoxelUpdater make_updater(const TsdfMap& map, const FrameSetup& f) {
 
 /// Whether this CPU runs the integrators' AVX2 + F16C builds (checked once).
 bool have_avx2_f16c() {
+#ifdef SEMAP_TSDF_X86
   static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("f16c");
   return yes;
+#else
+  return false;
+#endif
 }
 
 int arena_threads(const TsdfConfig& cfg) { return cfg.threads > 0 ? cfg.threads : tbb::info::default_concurrency(); }
@@ -141,6 +152,21 @@ inline Eigen::Vector3i floor_cells(const Eigen::Vector3f& p) {
   return c;
 }
 
+/// Visits n cells from `cell`, each step along the axis of the smallest t_max (ties: as
+/// x < y ? (x < z ? x : z) : (y < z ? y : z)), picked by table: the choice is data-dependent, a
+/// branch on it mispredicts.
+template <class Visit>
+inline void step_cells(std::array<int, 3> cell, const std::array<int, 3>& step, std::array<float, 3> t_max,
+                       const std::array<float, 3>& t_delta, int n, Visit&& visit) {
+  static constexpr std::array<int8_t, 8> kAxis = {2, 2, 2, 0, 1, 2, 1, 0};  // [x<y | x<z << 1 | y<z << 2]
+  for (int i = 0; i < n; ++i) {
+    visit(Eigen::Vector3i(cell[0], cell[1], cell[2]));
+    const int axis = kAxis[(t_max[0] < t_max[1]) | (t_max[0] < t_max[2]) << 1 | (t_max[1] < t_max[2]) << 2];
+    cell[axis] += step[axis];
+    t_max[axis] += t_delta[axis];
+  }
+}
+
 /// The stepping part of traverse_cells: the n cells from c = floor(pa) along pa -> pb.
 template <class Visit>
 void traverse_steps(const Eigen::Vector3f& pa, const Eigen::Vector3f& pb, const Eigen::Vector3i& c, int n, Visit&& visit) {
@@ -154,20 +180,16 @@ void traverse_steps(const Eigen::Vector3f& pa, const Eigen::Vector3f& pb, const 
     sign[i] = static_cast<float>(step[i]);
   }
   // The six divisions as two 4-lane ones (the same IEEE quotients); axes without motion never step.
+#ifdef SEMAP_TSDF_X86
   const __m128 d = _mm_load_ps(den.data());
   _mm_store_ps(t_max.data(), _mm_div_ps(_mm_load_ps(num.data()), d));
   _mm_store_ps(t_delta.data(), _mm_div_ps(_mm_load_ps(sign.data()), d));
+#else
+  for (int i = 0; i < 4; ++i) t_max[i] = num[i] / den[i], t_delta[i] = sign[i] / den[i];
+#endif
   for (int i = 0; i < 3; ++i)
     if (step[i] == 0) t_max[i] = t_delta[i] = std::numeric_limits<float>::infinity();
-  // The axis of the smallest t_max (ties: as x < y ? (x < z ? x : z) : (y < z ? y : z)), by table:
-  // the choice is data-dependent, a branch on it mispredicts.
-  static constexpr std::array<int8_t, 8> kAxis = {2, 2, 2, 0, 1, 2, 1, 0};  // [x<y | x<z << 1 | y<z << 2]
-  for (int i = 0; i < n; ++i) {
-    visit(Eigen::Vector3i(cell[0], cell[1], cell[2]));
-    const int axis = kAxis[(t_max[0] < t_max[1]) | (t_max[0] < t_max[2]) << 1 | (t_max[1] < t_max[2]) << 2];
-    cell[axis] += step[axis];
-    t_max[axis] += t_delta[axis];
-  }
+  step_cells(cell, step, {t_max[0], t_max[1], t_max[2]}, {t_delta[0], t_delta[1], t_delta[2]}, n, visit);
 }
 
 /// Amanatides-Woo traversal of the unit cells crossed by segment pa -> pb (in cell units).
@@ -483,7 +505,7 @@ class GroupedIntegrator final : public ArenaIntegrator {
       if (g >= 0 && groups_[g].key == key) return g;
       if (g >= 0) continue;
       const int32_t added = static_cast<int32_t>(groups_.size());
-      groups_.push_back(Group{key, -1, 0.0f, {}, 0, {}, {}});
+      groups_.push_back(Group{key, -1, 0.0f, Eigen::Vector3f::Zero(), 0, {}, {}});
       if (2 * groups_.size() <= table_.size()) {
         table_[h] = added;
         return added;
@@ -525,7 +547,7 @@ class GroupedIntegrator final : public ArenaIntegrator {
   }
   /// Baseline and AVX2+F16C builds, as the projective integrator's integrate_block_*.
   static void apply_block_sse2(Block& block, size_t k, const ApplyPass& p) { apply_block<false>(block, k, p); }
-  [[gnu::target("avx2,f16c")]] static void apply_block_avx2(Block& block, size_t k, const ApplyPass& p) {
+  SEMAP_TARGET_AVX2 static void apply_block_avx2(Block& block, size_t k, const ApplyPass& p) {
     apply_block<true>(block, k, p);
   }
 
@@ -620,34 +642,59 @@ template <bool kWide>
       x[l] = r.ray_x[uc];
       inv_norm[l] = r.inv_norm[uc];
     }
-    std::array<float, kLanes> a[3], b[3];
-    std::array<int, kLanes> ca[3], cb[3], n;
+    std::array<float, kLanes> a[3], b[3], t_max[3], t_delta[3], s_near, s_far;
+    std::array<int, kLanes> ca[3], cb[3], n, step[3];
     for (int l = 0; l < kLanes; ++l) {
       // The pixel's point is z * ray (camera frame), at distance z / inv_norm; the band
       // [dist - delta, dist + delta] along the ray, in block units (no division per pixel).
-      const float band = r.delta * inv_norm[l], near = z[l] - band, far = z[l] + band;
-      const float s_near = 0.0f < near ? near : 0.0f;  // std::max(0, near)
+      const float band = r.delta * inv_norm[l], near = z[l] - band;
+      s_near[l] = 0.0f < near ? near : 0.0f;  // std::max(0, near)
+      s_far[l] = z[l] + band;
       n[l] = 1;
-      for (int i = 0; i < 3; ++i) {
-        const float ray = r.row_ray[i] + r.col0[i] * x[l];
-        a[i][l] = r.t_blocks[i] + ray * s_near;
-        b[i][l] = r.t_blocks[i] + ray * far;
-        const int ta = static_cast<int>(a[i][l]), tb = static_cast<int>(b[i][l]);  // floor_cells
-        ca[i][l] = ta - (a[i][l] < static_cast<float>(ta) ? 1 : 0);
-        cb[i][l] = tb - (b[i][l] < static_cast<float>(tb) ? 1 : 0);
-        n[l] += std::abs(cb[i][l] - ca[i][l]);
+    }
+    for (int i = 0; i < 3; ++i) {  // per axis, 8 lanes per step (branch-free: vectorised)
+      const float row_ray = r.row_ray[i], col0 = r.col0[i], t = r.t_blocks[i];
+      constexpr float kInf = std::numeric_limits<float>::infinity();
+      for (int l = 0; l < kLanes; ++l) {
+        const float ray = row_ray + col0 * x[l], pa = t + ray * s_near[l], pb = t + ray * s_far[l];
+        a[i][l] = pa;
+        b[i][l] = pb;
+        const int ta = static_cast<int>(pa), tb = static_cast<int>(pb);  // floor_cells
+        const int fa = ta - static_cast<int>(pa < static_cast<float>(ta)), fb = tb - static_cast<int>(pb < static_cast<float>(tb));
+        ca[i][l] = fa;
+        cb[i][l] = fb;
+        n[l] += fb > fa ? fb - fa : fa - fb;
+        // traverse_steps' set-up, for every pixel (used where n > 2): the same quotients.
+        const float dir = pb - pa;
+        const int st = static_cast<int>(dir > 0) - static_cast<int>(dir < 0);
+        step[i][l] = st;
+        const float q_max = (static_cast<float>(fa + static_cast<int>(st > 0)) - pa) / dir, q_delta = static_cast<float>(st) / dir;
+        t_max[i][l] = st == 0 ? kInf : q_max;
+        t_delta[i][l] = st == 0 ? kInf : q_delta;
       }
     }
+    // The usable pixels split without branches into short segments (n <= 2: as traverse_cells,
+    // the end cells are all they cross; visiting c twice when n = 1 emits nothing new) and
+    // stepped ones: a branch per pixel on n mispredicted about every other pixel.
+    std::array<int8_t, kLanes> short_lanes, long_lanes;
+    int n_short = 0, n_long = 0;
     for (int l = 0; l < kLanes; ++l) {
-      if (z[l] == 0.0f) continue;
-      ++valid;
-      const Eigen::Vector3i c(ca[0][l], ca[1][l], ca[2][l]);
-      if (n[l] <= 2) {  // as traverse_cells: the end cells are all a short segment crosses
-        visit(c);
-        if (n[l] == 2) visit(Eigen::Vector3i(cb[0][l], cb[1][l], cb[2][l]));
-      } else {
-        traverse_steps(Eigen::Vector3f(a[0][l], a[1][l], a[2][l]), Eigen::Vector3f(b[0][l], b[1][l], b[2][l]), c, n[l], visit);
-      }
+      const bool usable = z[l] != 0.0f;
+      short_lanes[n_short] = static_cast<int8_t>(l);
+      long_lanes[n_long] = static_cast<int8_t>(l);
+      n_short += usable & (n[l] <= 2);
+      n_long += usable & (n[l] > 2);
+    }
+    valid += static_cast<size_t>(n_short + n_long);
+    for (int i = 0; i < n_short; ++i) {
+      const int l = short_lanes[i];
+      visit(Eigen::Vector3i(ca[0][l], ca[1][l], ca[2][l]));
+      visit(Eigen::Vector3i(cb[0][l], cb[1][l], cb[2][l]));
+    }
+    for (int i = 0; i < n_long; ++i) {
+      const int l = long_lanes[i];
+      step_cells({ca[0][l], ca[1][l], ca[2][l]}, {step[0][l], step[1][l], step[2][l]},
+                 {t_max[0][l], t_max[1][l], t_max[2][l]}, {t_delta[0][l], t_delta[1][l], t_delta[2][l]}, n[l], visit);
     }
   }
   return valid;
@@ -655,7 +702,7 @@ template <bool kWide>
 size_t band_blocks_sse2(const BandRow& r, RecentKeys& recent, std::vector<uint64_t>& out) {
   return band_blocks<false>(r, recent, out);
 }
-[[gnu::target("avx2,f16c")]] size_t band_blocks_avx2(const BandRow& r, RecentKeys& recent, std::vector<uint64_t>& out) {
+SEMAP_TARGET_AVX2 size_t band_blocks_avx2(const BandRow& r, RecentKeys& recent, std::vector<uint64_t>& out) {
   return band_blocks<true>(r, recent, out);
 }
 
@@ -777,7 +824,7 @@ template <bool kNativeHalf>
 /// (16 voxels per pass-1 step, hardware binary16), chosen at run time. No FMA in either: the
 /// same roundings, so the same map (checked by bench_tsdf's map_checksum).
 size_t integrate_block_sse2(Block& block, const BlockPass& p) { return integrate_block<false>(block, p); }
-[[gnu::target("avx2,f16c")]] size_t integrate_block_avx2(Block& block, const BlockPass& p) {
+SEMAP_TARGET_AVX2 size_t integrate_block_avx2(Block& block, const BlockPass& p) {
   return integrate_block<true>(block, p);
 }
 
