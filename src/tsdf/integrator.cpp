@@ -266,6 +266,29 @@ class ArenaIntegrator : public Integrator {
   tbb::task_arena arena_;
 };
 
+/// The voxels one grouped ray crosses (structure of arrays) and their B6 signed distances
+/// d(v, p, o) = |p - o| - |v - o|, computed for all of them in one vectorised loop (the same
+/// float operations as the Eigen expression per voxel: (v + 0.5) s - o, then its norm).
+struct RayCells {
+  std::vector<int> x, y, z;
+  std::vector<float> d;
+  void clear() { x.clear(), y.clear(), z.clear(); }
+  void add(const Eigen::Vector3i& v) { x.push_back(v.x()), y.push_back(v.y()), z.push_back(v.z()); }
+  size_t size() const { return x.size(); }
+  Eigen::Vector3i voxel(size_t j) const { return {x[j], y[j], z[j]}; }
+  void distances(float dist, float s, const Eigen::Vector3f& o) {
+    d.resize(x.size());
+    const int* cx = x.data(); const int* cy = y.data(); const int* cz = z.data();
+    float* out = d.data();
+    const float ox = o.x(), oy = o.y(), oz = o.z();
+    for (size_t j = 0; j < x.size(); ++j) {
+      const float px = (static_cast<float>(cx[j]) + 0.5f) * s - ox, py = (static_cast<float>(cy[j]) + 0.5f) * s - oy,
+                  pz = (static_cast<float>(cz[j]) + 0.5f) * s - oz;
+      out[j] = dist - std::sqrt(px * px + (py * py + pz * pz));  // Eigen's norm() order
+    }
+  }
+};
+
 // =============================================================================================
 // Grouped ray casting (METHODS B5 + B6)
 // =============================================================================================
@@ -427,6 +450,7 @@ class GroupedIntegrator final : public ArenaIntegrator {
     tbb::parallel_for(size_t{0}, n_chunks, [&](size_t c) {
       std::vector<RayUpdate>& out = chunk_updates_[c];
       out.clear();
+      RayCells cells;
       const size_t end = std::min(groups_.size(), (c + 1) * kChunk);
       for (size_t g = c * kChunk; g < end; ++g) {
         const Eigen::Vector3f ray = groups_[g].point - f.t_wc;
@@ -435,12 +459,11 @@ class GroupedIntegrator final : public ArenaIntegrator {
         const Eigen::Vector3f dir = ray / dist;
         const Eigen::Vector3f a = f.t_wc + dir * std::max(0.0f, dist - delta);
         const Eigen::Vector3f b = f.t_wc + dir * (dist + delta);
-        traverse_cells(a / f.s, b / f.s, [&](const Eigen::Vector3i& vox) {
-          const Eigen::Vector3f centre = (vox.cast<float>().array() + 0.5f) * f.s;
-          const float d = dist - (centre - f.t_wc).norm();  // B6 d(v, p, o)
-          if (d <= -delta) return;
-          out.push_back(RayUpdate{vox, d, static_cast<int32_t>(g)});
-        });
+        cells.clear();
+        traverse_cells(a / f.s, b / f.s, [&](const Eigen::Vector3i& vox) { cells.add(vox); });
+        cells.distances(dist, f.s, f.t_wc);
+        for (size_t j = 0; j < cells.size(); ++j)
+          if (!(cells.d[j] <= -delta)) out.push_back(RayUpdate{cells.voxel(j), cells.d[j], static_cast<int32_t>(g)});
       }
     });
     // 5. Bucket the updates by block (serial, stable: fixed order per block).
