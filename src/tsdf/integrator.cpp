@@ -16,6 +16,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstdlib>
 
 #include "semap/core/error.hpp"
 
@@ -129,10 +130,12 @@ VoxelUpdater make_updater(const TsdfMap& map, const FrameSetup& f) {
                       map.has_label_layer(), map.has_bayes_layer(), map.has_colour_layer()};
 }
 
-/// Whether this CPU runs the integrators' AVX2 + F16C builds (checked once).
+/// Whether this CPU runs the integrators' AVX2 + F16C builds (checked once). The environment
+/// variable SEMAP_TSDF_BASELINE_ISA forces the baseline builds (to check both give one map).
 bool have_avx2_f16c() {
 #ifdef SEMAP_TSDF_X86
-  static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("f16c");
+  static const bool yes =
+      !std::getenv("SEMAP_TSDF_BASELINE_ISA") && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("f16c");
   return yes;
 #else
   return false;
