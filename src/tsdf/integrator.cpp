@@ -17,6 +17,7 @@
 #include <array>
 #include <cmath>
 #include <cstdlib>
+#include <utility>
 
 #include "semap/core/error.hpp"
 
@@ -329,6 +330,12 @@ class GroupedIntegrator final : public ArenaIntegrator {
     float d;
     int32_t group;
   };
+  /// Consecutive updates of one chunk in one block.
+  struct BlockRun {
+    BlockIndex block;
+    uint32_t count;
+    int32_t slot;  ///< the block's index among the frame's touched blocks
+  };
   /// A RayUpdate bucketed by block: the voxel by its local index.
   struct BlockUpdate {
     float d;
@@ -449,6 +456,7 @@ class GroupedIntegrator final : public ArenaIntegrator {
     constexpr size_t kChunk = 512;
     const size_t n_chunks = (groups_.size() + kChunk - 1) / kChunk;
     chunk_updates_.resize(n_chunks);
+    chunk_runs_.resize(n_chunks);
     const float delta = f.delta;
     tbb::parallel_for(size_t{0}, n_chunks, [&](size_t c) {
       std::vector<RayUpdate>& out = chunk_updates_[c];
@@ -468,38 +476,45 @@ class GroupedIntegrator final : public ArenaIntegrator {
         for (size_t j = 0; j < cells.size(); ++j)
           if (!(cells.d[j] <= -delta)) out.push_back(RayUpdate{cells.voxel(j), cells.d[j], static_cast<int32_t>(g)});
       }
+      // The chunk's updates as runs of one block (step 5 touches each run, not each update).
+      std::vector<BlockRun>& runs = chunk_runs_[c];
+      runs.clear();
+      for (const RayUpdate& u : out) {
+        const BlockIndex b = block_of_voxel(u.voxel);
+        if (runs.empty() || runs.back().block != b) runs.push_back(BlockRun{b, 0, -1});
+        ++runs.back().count;
+      }
     });
-    // 5. Bucket the updates by block (serial, stable: fixed order per block).
+    // 5. Bucket the updates by block, stable (each block's updates in ray order): the blocks
+    // are touched per run in ray order (serial), each chunk's updates then go to its own
+    // cursors, which start after the earlier chunks' updates of the block (parallel).
     TouchedBlocks touched;
     touched.stamp = map.next_frame_stamp();
     size_t n_updates = 0;
     for (const auto& v : chunk_updates_) n_updates += v.size();
-    update_block_.resize(n_updates);
-    offsets_.assign(1, 0);  // offsets_[slot + 1]: updates of the block, then their prefix sums
-    size_t i = 0;
-    BlockIndex last_block(INT32_MIN, INT32_MIN, INT32_MIN);
-    int32_t last_slot = -1;
-    for (const auto& chunk : chunk_updates_)
-      for (const RayUpdate& u : chunk) {
-        const BlockIndex b = block_of_voxel(u.voxel);
-        if (b != last_block) {
-          last_slot = touched.touch(map, b);
-          last_block = b;
-          if (static_cast<size_t>(last_slot) + 1 == offsets_.size()) offsets_.push_back(0);
-        }
-        ++offsets_[last_slot + 1];
-        update_block_[i++] = last_slot;
-      }
+    for (auto& runs : chunk_runs_)
+      for (BlockRun& run : runs) run.slot = touched.touch(map, run.block);
     const size_t n_blocks = touched.blocks.size();
-    for (size_t k = 0; k < n_blocks; ++k) offsets_[k + 1] += offsets_[k];
-    sorted_.resize(n_updates);
-    {
-      std::vector<size_t> cursor(offsets_.begin(), offsets_.end() - 1);
-      size_t k = 0;
-      for (const auto& chunk : chunk_updates_)
-        for (const RayUpdate& u : chunk)
-          sorted_[cursor[update_block_[k++]]++] = BlockUpdate{u.d, u.group, static_cast<uint16_t>(local_index(u.voxel))};
+    chunk_cursors_.resize(n_chunks);
+    tbb::parallel_for(size_t{0}, n_chunks, [&](size_t c) {
+      chunk_cursors_[c].assign(n_blocks, 0);  // first: the chunk's update count per block
+      for (const BlockRun& run : chunk_runs_[c]) chunk_cursors_[c][run.slot] += run.count;
+    });
+    offsets_.assign(n_blocks + 1, 0);
+    for (size_t k = 0; k < n_blocks; ++k) {
+      size_t at = offsets_[k];
+      for (size_t c = 0; c < n_chunks; ++c) at += std::exchange(chunk_cursors_[c][k], at);
+      offsets_[k + 1] = at;
     }
+    sorted_.resize(n_updates);
+    tbb::parallel_for(size_t{0}, n_chunks, [&](size_t c) {
+      const RayUpdate* u = chunk_updates_[c].data();
+      for (const BlockRun& run : chunk_runs_[c]) {
+        size_t& cursor = chunk_cursors_[c][run.slot];
+        for (uint32_t j = 0; j < run.count; ++j, ++u)
+          sorted_[cursor++] = BlockUpdate{u->d, u->group, static_cast<uint16_t>(local_index(u->voxel))};
+      }
+    });
     // 6. Apply per block in parallel (each block's updates in ray order: deterministic).
     const VoxelUpdater updater = make_updater(map, f);
     const ApplyPass pass{updater,
@@ -601,7 +616,8 @@ class GroupedIntegrator final : public ArenaIntegrator {
   std::vector<Group> groups_;
   std::vector<LabelSlot> slots_;
   std::vector<std::vector<RayUpdate>> chunk_updates_;
-  std::vector<int32_t> update_block_;
+  std::vector<std::vector<BlockRun>> chunk_runs_;
+  std::vector<std::vector<size_t>> chunk_cursors_;  ///< per chunk, per touched block
   std::vector<size_t> offsets_;
   std::vector<BlockUpdate> sorted_;
   std::vector<RayInfo> ray_info_;
