@@ -1,10 +1,15 @@
-// bench_tsdf: our TSDF integrators against Open3D's ScalableTSDFVolume on the SAME frames in one
+// bench_tsdf: our TSDF integrators against Open3D's ScalableTSDFVolume and its tensor
+// t::geometry::VoxelBlockGrid (CPU; what current Open3D users run) on the SAME frames in one
 // process (tum_fr1_rpy with ground-truth poses, and a synthetic sequence), 2 threads each, at
 // 1, 2 and 5 cm. Prints JSON: ms/frame, ratio Open3D/ours, bytes per allocated voxel, mesh
 // extraction time, and the block hash table against std::unordered_map (METHODS B4).
 //
 //   build/bench/bench_tsdf [--frames 200] [--synthetic-frames 60] [--threads 2]
 //                          [--voxels 0.01,0.02,0.05] [--synthetic DIR]
+//                          [--variants ours_projective_core,...]  (a subset of ours; Open3D always runs)
+// Each variant's JSON carries map_checksum (FNV-1a over every layer of the sorted blocks): a
+// speed-up that keeps the map bit-identical keeps the checksum.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -12,6 +17,7 @@
 #include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
+#include <thread>
 #include <unordered_map>
 #include <map>
 #include <cstring>
@@ -31,6 +37,9 @@
 #include <open3d/geometry/TriangleMesh.h>
 #include <open3d/pipelines/integration/ScalableTSDFVolume.h>
 #include <open3d/pipelines/integration/UniformTSDFVolume.h>
+#include <open3d/t/geometry/Image.h>
+#include <open3d/t/geometry/TriangleMesh.h>
+#include <open3d/t/geometry/VoxelBlockGrid.h>
 #endif
 
 using namespace semap;
@@ -89,9 +98,34 @@ struct Runner {
   std::string name;
   double wall_ms = 0, cpu_ms_total = 0;
   virtual ~Runner() = default;
+  /// Process CPU since c0, taken after a pause: worker threads that spin after a parallel
+  /// region (TBB's before they sleep) are charged to the system that left them spinning, not
+  /// to the next one measured. The main thread sleeps meanwhile (no CPU); wall time is taken
+  /// before the pause.
+  void charge_cpu(double c0) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(3));
+    cpu_ms_total += cpu_ms() - c0;
+  }
   virtual void integrate(const IntegrationInput& frame) = 0;
   virtual nlohmann::json finish(int threads) = 0;
 };
+
+/// FNV-1a over the block indices and every voxel layer, in sorted block order.
+uint64_t map_checksum(const TsdfMap& map) {
+  uint64_t h = 1469598103934665603ULL;
+  auto add = [&](const void* data, size_t n) {
+    const auto* p = static_cast<const uint8_t*>(data);
+    for (size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ULL;
+  };
+  for (const Block* b : map.sorted_blocks()) {
+    add(b->index.data(), sizeof(int) * 3);
+    add(b->voxels.data(), sizeof(b->voxels));
+    if (b->label_confidence) add(b->label_confidence.get(), kBlockVoxels);
+    if (b->bayes) add(b->bayes.get(), static_cast<size_t>(kBlockVoxels) * map.bayes().bytes_per_voxel());
+    if (b->colour) add(b->colour.get(), kBlockVoxels * sizeof(Rgb8));
+  }
+  return h;
+}
 
 struct OursRunner : Runner {
   Variant v;
@@ -116,8 +150,14 @@ struct OursRunner : Runner {
     const auto t0 = Clock::now();
     tsdf->integrate(in);
     wall_ms += ms_since(t0);
-    cpu_ms_total += cpu_ms() - c0;
+    charge_cpu(c0);
+    const IntegrationStats& s = tsdf->integrator().last_stats();
+    ++frames;
+    voxel_updates += s.voxel_updates;
+    touched_blocks += s.touched_blocks;
+    rays += s.rays;
   }
+  size_t frames = 0, voxel_updates = 0, touched_blocks = 0, rays = 0;
   nlohmann::json finish(int threads) override {
     const auto t0 = Clock::now();
     const TriangleMesh mesh = MeshExtractor(threads).extract_full(tsdf->map());
@@ -133,6 +173,11 @@ struct OursRunner : Runner {
     j["memory_mb"] = map.memory_bytes() / 1e6;
     j["mesh_ms"] = mesh_ms;
     j["mesh_triangles"] = mesh.triangles.size();
+    j["map_checksum"] = map_checksum(map);
+    const double n = static_cast<double>(std::max<size_t>(frames, 1));
+    j["voxel_updates_per_frame"] = voxel_updates / n;
+    j["touched_blocks_per_frame"] = touched_blocks / n;
+    if (rays) j["rays_per_frame"] = rays / n;
     return j;
   }
 };
@@ -167,7 +212,7 @@ struct Open3DRunner : Runner {
     const auto t0 = Clock::now();
     volume->Integrate(*rgbd, intrinsic, extrinsic);
     wall_ms += ms_since(t0);
-    cpu_ms_total += cpu_ms() - c0;
+    charge_cpu(c0);
   }
   nlohmann::json finish(int) override {
     const auto t0 = Clock::now();
@@ -182,6 +227,66 @@ struct Open3DRunner : Runner {
     j["memory_mb"] = voxels * sizeof(open3d::geometry::TSDFVoxel) / 1e6;
     j["mesh_ms"] = mesh_ms;
     j["mesh_triangles"] = mesh->triangles_.size();
+    return j;
+  }
+};
+
+/// Open3D's tensor VoxelBlockGrid on the CPU, as its TSDF examples configure it (tsdf Float32,
+/// weight and colour UInt16, 16^3 blocks) and fed as they read TUM: uint16 depth (TUM's 1/5000 m
+/// units, exactly the dataset's values) and uint8 RGB. Timed: block selection + integration.
+struct Open3DVoxelBlockGridRunner : Runner {
+  static constexpr float kDepthScale = 5000.0f;
+  std::unique_ptr<open3d::t::geometry::VoxelBlockGrid> vbg;
+  open3d::core::Tensor intrinsic;
+  float depth_max;
+  Open3DVoxelBlockGridRunner(const PinholeIntrinsics& K, double voxel, double max_depth) : depth_max(static_cast<float>(max_depth)) {
+    namespace core = open3d::core;
+    name = "open3d_voxel_block_grid";
+    vbg = std::make_unique<open3d::t::geometry::VoxelBlockGrid>(
+        std::vector<std::string>{"tsdf", "weight", "color"}, std::vector<core::Dtype>{core::Float32, core::UInt16, core::UInt16},
+        std::vector<core::SizeVector>{{1}, {1}, {3}}, static_cast<float>(voxel), 16, 50000, core::Device("CPU:0"));
+    intrinsic = core::Tensor::Init<double>({{K.fx, 0, K.cx}, {0, K.fy, K.cy}, {0, 0, 1}});
+  }
+  void integrate(const IntegrationInput& f) override {
+    namespace core = open3d::core;
+    const int H = f.depth.rows, W = f.depth.cols;
+    core::Tensor depth({H, W, 1}, core::UInt16), colour({H, W, 3}, core::UInt8);
+    auto* d = depth.GetDataPtr<uint16_t>();
+    auto* c = colour.GetDataPtr<uint8_t>();
+    for (int v = 0; v < H; ++v)
+      for (int u = 0; u < W; ++u) {
+        const float z = f.depth.at<float>(v, u);
+        d[static_cast<size_t>(v) * W + u] = std::isfinite(z) && z > 0 ? static_cast<uint16_t>(std::lround(z * kDepthScale)) : 0;
+        const cv::Vec3b bgr = f.colour.at<cv::Vec3b>(v, u);
+        uint8_t* rgb = c + 3 * (static_cast<size_t>(v) * W + u);
+        rgb[0] = bgr[2], rgb[1] = bgr[1], rgb[2] = bgr[0];
+      }
+    const open3d::t::geometry::Image depth_image(depth), colour_image(colour);
+    const Eigen::Matrix4d T_cw = f.T_world_camera.inverse().matrix();
+    core::Tensor extrinsic({4, 4}, core::Float64);
+    for (int r = 0; r < 4; ++r)
+      for (int k = 0; k < 4; ++k) extrinsic[r][k] = T_cw(r, k);
+    const double c0 = cpu_ms();
+    const auto t0 = Clock::now();
+    const core::Tensor blocks = vbg->GetUniqueBlockCoordinates(depth_image, intrinsic, extrinsic, kDepthScale, depth_max, 4.0f);
+    vbg->Integrate(blocks, depth_image, colour_image, intrinsic, extrinsic, kDepthScale, depth_max, 4.0f);
+    wall_ms += ms_since(t0);
+    charge_cpu(c0);
+  }
+  nlohmann::json finish(int) override {
+    const auto t0 = Clock::now();
+    const auto mesh = vbg->ExtractTriangleMesh(0.0f);
+    const double mesh_ms = ms_since(t0);
+    const size_t blocks = vbg->GetHashMap().Size();
+    constexpr size_t kVoxelBytes = 4 + 2 + 3 * 2;  // tsdf Float32, weight UInt16, colour 3 x UInt16
+    nlohmann::json j;
+    j["variant"] = name;
+    j["blocks"] = blocks;
+    j["allocated_voxels"] = blocks * 16 * 16 * 16;
+    j["bytes_per_voxel_layers"] = kVoxelBytes;
+    j["memory_mb"] = blocks * 16 * 16 * 16 * kVoxelBytes / 1e6;
+    j["mesh_ms"] = mesh_ms;
+    j["mesh_triangles"] = mesh.HasTriangleIndices() ? mesh.GetTriangleIndices().GetLength() : 0;
     return j;
   }
 };
@@ -225,11 +330,17 @@ nlohmann::json hash_benchmark(const TsdfMap& map) {
   return j;
 }
 
-std::vector<double> parse_list(const std::string& s) {
-  std::vector<double> out;
+std::vector<std::string> split_list(const std::string& s) {
+  std::vector<std::string> out;
   std::stringstream ss(s);
   std::string item;
-  while (std::getline(ss, item, ',')) out.push_back(std::stod(item));
+  while (std::getline(ss, item, ',')) out.push_back(item);
+  return out;
+}
+
+std::vector<double> parse_list(const std::string& s) {
+  std::vector<double> out;
+  for (const std::string& item : split_list(s)) out.push_back(std::stod(item));
   return out;
 }
 
@@ -246,6 +357,7 @@ int main(int argc, char** argv) {
   int frames = 200, synthetic_frames = 60, threads = 2;
   std::vector<double> voxels = {0.01, 0.02, 0.05};
   fs::path synthetic_dir;
+  std::vector<std::string> only_variants;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i], v = argv[i + 1];
     if (a == "--frames") frames = std::stoi(v);
@@ -253,6 +365,7 @@ int main(int argc, char** argv) {
     else if (a == "--threads") threads = std::stoi(v);
     else if (a == "--voxels") voxels = parse_list(v);
     else if (a == "--synthetic") synthetic_dir = v;
+    else if (a == "--variants") only_variants = split_list(v);
     else {
       std::cerr << "unknown option " << a << "\n";
       return 2;
@@ -272,7 +385,7 @@ int main(int argc, char** argv) {
   }
   if (!synthetic_dir.empty()) sequences.push_back(load_sequence("synthetic", synthetic_dir, synthetic_frames));
 
-  const std::vector<Variant> variants = {
+  std::vector<Variant> variants = {
       {"ours_projective_core", "projective", false, false, false},
       {"ours_grouped_core", "grouped", false, false, false},
       {"ours_projective_labels_rgb", "projective", true, false, true},
@@ -280,6 +393,10 @@ int main(int argc, char** argv) {
       {"ours_projective_labels_bayes_rgb", "projective", true, true, true},
       {"ours_grouped_labels_bayes_rgb", "grouped", true, true, true},
   };
+  if (!only_variants.empty())
+    std::erase_if(variants, [&](const Variant& v) {
+      return std::find(only_variants.begin(), only_variants.end(), v.name) == only_variants.end();
+    });
   nlohmann::json out;
   out["threads"] = threads;
   for (const Sequence& seq : sequences) {
@@ -295,12 +412,16 @@ int main(int argc, char** argv) {
       if (auto set_threads = reinterpret_cast<void (*)(int)>(dlsym(RTLD_DEFAULT, "omp_set_num_threads")))
         set_threads(threads);  // Open3D's OpenMP (libgomp, loaded with Open3D), without linking it here
       runners.push_back(std::make_unique<Open3DRunner>(seq.K, voxel));
+      runners.push_back(std::make_unique<Open3DVoxelBlockGridRunner>(seq.K, voxel, 4.0));
 #endif
       for (const IntegrationInput& frame : seq.frames)
         for (auto& r : runners) r->integrate(frame);
       const double n = static_cast<double>(seq.frames.size());
       nlohmann::json jv = nlohmann::json::array();
-      const Runner& o3d = *runners.back();
+#ifdef SEMAP_HAVE_OPEN3D
+      const Runner& o3d = *runners[runners.size() - 2];  // ScalableTSDFVolume
+      const Runner& vbg = *runners.back();               // VoxelBlockGrid
+#endif
       for (auto& r : runners) {
         nlohmann::json j = r->finish(threads);
         j["ms_per_frame"] = r->wall_ms / n;
@@ -308,13 +429,14 @@ int main(int argc, char** argv) {
 #ifdef SEMAP_HAVE_OPEN3D
         j["ratio_open3d_over_ours"] = o3d.wall_ms / r->wall_ms;
         j["cpu_ratio_open3d_over_ours"] = o3d.cpu_ms_total / r->cpu_ms_total;
+        j["ratio_open3d_vbg_over_ours"] = vbg.wall_ms / r->wall_ms;
+        j["cpu_ratio_open3d_vbg_over_ours"] = vbg.cpu_ms_total / r->cpu_ms_total;
 #endif
         std::cerr << seq.name << " " << voxel << " " << r->name << " " << j["ms_per_frame"] << " ms/frame, cpu "
                   << j["cpu_ms_per_frame"] << " ms/frame\n";
         jv.push_back(j);
       }
-      (void)o3d;
-      if (seq.name == "tum_fr1_rpy" && voxel == 0.02)
+      if (seq.name == "tum_fr1_rpy" && voxel == 0.02 && !variants.empty() && variants[0].name == "ours_projective_core")
         out["block_hash"] = hash_benchmark(static_cast<OursRunner&>(*runners[0]).tsdf->map());
       std::ostringstream key;
       key << voxel * 100 << "cm";

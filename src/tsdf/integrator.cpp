@@ -5,7 +5,19 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#if defined(__x86_64__) || defined(__i386__)
+#include <emmintrin.h>
+#define SEMAP_TSDF_X86 1
+// The integrators' per-block work is also built for AVX2 + F16C, chosen at run time.
+#define SEMAP_TARGET_AVX2 [[gnu::target("avx2,f16c")]]
+#else
+#define SEMAP_TARGET_AVX2
+#endif
+
+#include <array>
 #include <cmath>
+#include <cstdlib>
+#include <utility>
 
 #include "semap/core/error.hpp"
 
@@ -80,6 +92,9 @@ struct VoxelUpdater {
   /// d: signed distance (positive in front), w: ray weight before the drop-off.
   /// Returns false when nothing was updated (beyond -delta).
   /// Inlined into the voxel loops (measured: a call per update cost ~5 % of a projective frame).
+  /// kNativeHalf: binary16 by the compiler's _Float16 (F16C instructions in a function built
+  /// for them), the same IEEE round-to-nearest-even values as the hand-rolled conversions.
+  template <bool kNativeHalf = false>
   [[gnu::always_inline]] bool update(Block& block, int li, float d, float w, ClassId label,
                                      const ClassDistribution* observation, const Rgb8* colour) const {
     if (d <= -delta) return false;
@@ -88,7 +103,9 @@ struct VoxelUpdater {
     TsdfVoxel& v = block.voxels[li];
     const float W = wq.decode(v.weight_q);
     const float W_new = W + w;
-    v.set_sdf(W > 0 ? (W * v.sdf() + w * d) / W_new : d);
+    const float D = kNativeHalf ? native_half_to_float(v.sdf_half) : v.sdf();
+    const float D_new = W > 0 ? (W * D + w * d) / W_new : d;
+    v.sdf_half = kNativeHalf ? native_float_to_half(D_new) : float_to_half(D_new);
     v.weight_q = wq.encode_from(std::min(W_new, w_max), v.weight_q);
     if (colour_layer && colour) {
       Rgb8& c = block.colour[li];
@@ -114,6 +131,18 @@ VoxelUpdater make_updater(const TsdfMap& map, const FrameSetup& f) {
                       map.has_label_layer(), map.has_bayes_layer(), map.has_colour_layer()};
 }
 
+/// Whether this CPU runs the integrators' AVX2 + F16C builds (checked once). The environment
+/// variable SEMAP_TSDF_BASELINE_ISA forces the baseline builds (to check both give one map).
+bool have_avx2_f16c() {
+#ifdef SEMAP_TSDF_X86
+  static const bool yes =
+      !std::getenv("SEMAP_TSDF_BASELINE_ISA") && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("f16c");
+  return yes;
+#else
+  return false;
+#endif
+}
+
 int arena_threads(const TsdfConfig& cfg) { return cfg.threads > 0 ? cfg.threads : tbb::info::default_concurrency(); }
 
 /// floor(p) per axis as cell indices: the truncating cast, one lower for negative non-integers.
@@ -127,6 +156,46 @@ inline Eigen::Vector3i floor_cells(const Eigen::Vector3f& p) {
   return c;
 }
 
+/// Visits n cells from `cell`, each step along the axis of the smallest t_max (ties: as
+/// x < y ? (x < z ? x : z) : (y < z ? y : z)), picked by table: the choice is data-dependent, a
+/// branch on it mispredicts.
+template <class Visit>
+inline void step_cells(std::array<int, 3> cell, const std::array<int, 3>& step, std::array<float, 3> t_max,
+                       const std::array<float, 3>& t_delta, int n, Visit&& visit) {
+  static constexpr std::array<int8_t, 8> kAxis = {2, 2, 2, 0, 1, 2, 1, 0};  // [x<y | x<z << 1 | y<z << 2]
+  for (int i = 0; i < n; ++i) {
+    visit(Eigen::Vector3i(cell[0], cell[1], cell[2]));
+    const int axis = kAxis[(t_max[0] < t_max[1]) | (t_max[0] < t_max[2]) << 1 | (t_max[1] < t_max[2]) << 2];
+    cell[axis] += step[axis];
+    t_max[axis] += t_delta[axis];
+  }
+}
+
+/// The stepping part of traverse_cells: the n cells from c = floor(pa) along pa -> pb.
+template <class Visit>
+void traverse_steps(const Eigen::Vector3f& pa, const Eigen::Vector3f& pb, const Eigen::Vector3i& c, int n, Visit&& visit) {
+  const Eigen::Vector3f dir = pb - pa;
+  std::array<int, 3> cell{c.x(), c.y(), c.z()}, step;
+  alignas(16) std::array<float, 4> t_max, t_delta, num{0, 0, 0, 0}, den{1, 1, 1, 1}, sign{0, 0, 0, 0};
+  for (int i = 0; i < 3; ++i) {
+    step[i] = dir[i] > 0 ? 1 : (dir[i] < 0 ? -1 : 0);
+    num[i] = static_cast<float>(c[i] + (step[i] > 0 ? 1 : 0)) - pa[i];  // to the first boundary
+    den[i] = dir[i];
+    sign[i] = static_cast<float>(step[i]);
+  }
+  // The six divisions as two 4-lane ones (the same IEEE quotients); axes without motion never step.
+#ifdef SEMAP_TSDF_X86
+  const __m128 d = _mm_load_ps(den.data());
+  _mm_store_ps(t_max.data(), _mm_div_ps(_mm_load_ps(num.data()), d));
+  _mm_store_ps(t_delta.data(), _mm_div_ps(_mm_load_ps(sign.data()), d));
+#else
+  for (int i = 0; i < 4; ++i) t_max[i] = num[i] / den[i], t_delta[i] = sign[i] / den[i];
+#endif
+  for (int i = 0; i < 3; ++i)
+    if (step[i] == 0) t_max[i] = t_delta[i] = std::numeric_limits<float>::infinity();
+  step_cells(cell, step, {t_max[0], t_max[1], t_max[2]}, {t_delta[0], t_delta[1], t_delta[2]}, n, visit);
+}
+
 /// Amanatides-Woo traversal of the unit cells crossed by segment pa -> pb (in cell units).
 template <class Visit>
 void traverse_cells(const Eigen::Vector3f& pa, const Eigen::Vector3f& pb, Visit&& visit) {
@@ -138,32 +207,17 @@ void traverse_cells(const Eigen::Vector3f& pa, const Eigen::Vector3f& pb, Visit&
     if (n == 2) visit(end);
     return;
   }
-  const Eigen::Vector3f dir = pb - pa;
-  Eigen::Vector3i step;
-  Eigen::Vector3f t_max, t_delta;
-  for (int i = 0; i < 3; ++i) {
-    step[i] = dir[i] > 0 ? 1 : (dir[i] < 0 ? -1 : 0);
-    if (step[i] == 0) {
-      t_max[i] = t_delta[i] = std::numeric_limits<float>::infinity();
-    } else {
-      const float boundary = static_cast<float>(c[i] + (step[i] > 0 ? 1 : 0));
-      t_max[i] = (boundary - pa[i]) / dir[i];
-      t_delta[i] = static_cast<float>(step[i]) / dir[i];
-    }
-  }
-  for (int i = 0; i < n; ++i) {
-    visit(c);
-    int axis = t_max.x() < t_max.y() ? (t_max.x() < t_max.z() ? 0 : 2) : (t_max.y() < t_max.z() ? 1 : 2);
-    c[axis] += step[axis];
-    t_max[axis] += t_delta[axis];
-  }
+  traverse_steps(pa, pb, c, n, visit);
 }
 
 // Group keys: 21 bits per axis (voxel indices within +-2^20).
 constexpr int kKeyBits = 21;
 constexpr int32_t kKeyOffset = 1 << (kKeyBits - 1);
 inline bool key_in_range(const Eigen::Vector3i& v) {
-  return (v.array() >= -kKeyOffset).all() && (v.array() < kKeyOffset).all();
+  // Each offset coordinate within [0, 2^kKeyBits), as unsigned: one test for all three.
+  const uint32_t x = static_cast<uint32_t>(v.x() + kKeyOffset), y = static_cast<uint32_t>(v.y() + kKeyOffset),
+                 z = static_cast<uint32_t>(v.z() + kKeyOffset);
+  return ((x | y | z) >> kKeyBits) == 0;
 }
 inline uint64_t pack_key(const Eigen::Vector3i& v) {
   return static_cast<uint64_t>(v.x() + kKeyOffset) | (static_cast<uint64_t>(v.y() + kKeyOffset) << kKeyBits) |
@@ -216,6 +270,29 @@ class ArenaIntegrator : public Integrator {
   tbb::task_arena arena_;
 };
 
+/// The voxels one grouped ray crosses (structure of arrays) and their B6 signed distances
+/// d(v, p, o) = |p - o| - |v - o|, computed for all of them in one vectorised loop (the same
+/// float operations as the Eigen expression per voxel: (v + 0.5) s - o, then its norm).
+struct RayCells {
+  std::vector<int> x, y, z;
+  std::vector<float> d;
+  void clear() { x.clear(), y.clear(), z.clear(); }
+  void add(const Eigen::Vector3i& v) { x.push_back(v.x()), y.push_back(v.y()), z.push_back(v.z()); }
+  size_t size() const { return x.size(); }
+  Eigen::Vector3i voxel(size_t j) const { return {x[j], y[j], z[j]}; }
+  void distances(float dist, float s, const Eigen::Vector3f& o) {
+    d.resize(x.size());
+    const int* cx = x.data(); const int* cy = y.data(); const int* cz = z.data();
+    float* out = d.data();
+    const float ox = o.x(), oy = o.y(), oz = o.z();
+    for (size_t j = 0; j < x.size(); ++j) {
+      const float px = (static_cast<float>(cx[j]) + 0.5f) * s - ox, py = (static_cast<float>(cy[j]) + 0.5f) * s - oy,
+                  pz = (static_cast<float>(cz[j]) + 0.5f) * s - oz;
+      out[j] = dist - std::sqrt(px * px + (py * py + pz * pz));  // Eigen's norm() order
+    }
+  }
+};
+
 // =============================================================================================
 // Grouped ray casting (METHODS B5 + B6)
 // =============================================================================================
@@ -253,6 +330,35 @@ class GroupedIntegrator final : public ArenaIntegrator {
     float d;
     int32_t group;
   };
+  /// Consecutive updates of one chunk in one block.
+  struct BlockRun {
+    BlockIndex block;
+    uint32_t count;
+    int32_t slot;  ///< the block's index among the frame's touched blocks
+  };
+  /// A RayUpdate bucketed by block: the voxel by its local index.
+  struct BlockUpdate {
+    float d;
+    int32_t group;
+    uint16_t li;
+  };
+  /// What a voxel update reads of its ray (group), 8 bytes: the apply loop's reads of the
+  /// 100-byte groups were its cache misses.
+  struct RayInfo {
+    float weight;
+    Rgb8 colour;
+    ClassId label;
+  };
+  /// What the per-block apply step of one frame reads.
+  struct ApplyPass {
+    const VoxelUpdater& updater;
+    const BlockUpdate* updates;
+    const size_t* offsets;
+    const RayInfo* rays;
+    const Group* groups;
+    float label_band;
+    bool labels, colour, observation;
+  };
 
   void run(TsdfMap& map, const IntegrationInput& in, const FrameSetup& f) override {
     const int W = f.width, H = f.height;
@@ -279,28 +385,23 @@ class GroupedIntegrator final : public ArenaIntegrator {
       }
     });
     // 2. Group by voxel (serial, pixel order: deterministic). METHODS B5.
+    // The group table is sized for ~4x the previous frame's groups (not 2x the pixels: a table
+    // that size was a 4 MB fill and a cache miss per probe) and doubles at half load. Group ids
+    // follow pixel order whatever the table size.
     size_t capacity = 1024;
-    while (capacity < 2 * n_pixels) capacity *= 2;
+    while (capacity < 4 * groups_.size()) capacity *= 2;
     table_.assign(capacity, -1);
-    const size_t mask = capacity - 1;
     groups_.clear();
     slots_.clear();
+    uint64_t last_key = ~0ULL;
+    int32_t g = -1;
     for (size_t i = 0; i < n_pixels; ++i) {
       PixelPoint& pp = points_[i];
       if (pp.w == 0) continue;
       ++stats_.valid_pixels;
-      size_t h = mix_key(pp.key) & mask;
-      int32_t g;
-      while (true) {
-        g = table_[h];
-        if (g < 0) {
-          g = static_cast<int32_t>(groups_.size());
-          table_[h] = g;
-          groups_.push_back(Group{pp.key, -1, 0.0f, {}, 0, {}, {}});
-          break;
-        }
-        if (groups_[g].key == pp.key) break;
-        h = (h + 1) & mask;
+      if (pp.key != last_key) {  // neighbouring pixels mostly fall into the same voxel
+        g = find_or_add_group(pp.key);
+        last_key = pp.key;
       }
       pp.group = g;
       Group& group = groups_[g];
@@ -349,14 +450,18 @@ class GroupedIntegrator final : public ArenaIntegrator {
       }
     }
     if (want_observation && f.probabilities) group_probabilities(in, f, map.bayes().k());
+    ray_info_.resize(groups_.size());
+    for (size_t g = 0; g < groups_.size(); ++g) ray_info_[g] = RayInfo{groups_[g].total_weight, groups_[g].colour, groups_[g].label};
     // 4. Cast one ray per group through the truncation band (parallel in fixed chunks).
     constexpr size_t kChunk = 512;
     const size_t n_chunks = (groups_.size() + kChunk - 1) / kChunk;
     chunk_updates_.resize(n_chunks);
+    chunk_runs_.resize(n_chunks);
     const float delta = f.delta;
     tbb::parallel_for(size_t{0}, n_chunks, [&](size_t c) {
       std::vector<RayUpdate>& out = chunk_updates_[c];
       out.clear();
+      RayCells cells;
       const size_t end = std::min(groups_.size(), (c + 1) * kChunk);
       for (size_t g = c * kChunk; g < end; ++g) {
         const Eigen::Vector3f ray = groups_[g].point - f.t_wc;
@@ -365,75 +470,126 @@ class GroupedIntegrator final : public ArenaIntegrator {
         const Eigen::Vector3f dir = ray / dist;
         const Eigen::Vector3f a = f.t_wc + dir * std::max(0.0f, dist - delta);
         const Eigen::Vector3f b = f.t_wc + dir * (dist + delta);
-        traverse_cells(a / f.s, b / f.s, [&](const Eigen::Vector3i& vox) {
-          const Eigen::Vector3f centre = (vox.cast<float>().array() + 0.5f) * f.s;
-          const float d = dist - (centre - f.t_wc).norm();  // B6 d(v, p, o)
-          if (d <= -delta) return;
-          out.push_back(RayUpdate{vox, d, static_cast<int32_t>(g)});
-        });
+        cells.clear();
+        traverse_cells(a / f.s, b / f.s, [&](const Eigen::Vector3i& vox) { cells.add(vox); });
+        cells.distances(dist, f.s, f.t_wc);
+        for (size_t j = 0; j < cells.size(); ++j)
+          if (!(cells.d[j] <= -delta)) out.push_back(RayUpdate{cells.voxel(j), cells.d[j], static_cast<int32_t>(g)});
+      }
+      // The chunk's updates as runs of one block (step 5 touches each run, not each update).
+      std::vector<BlockRun>& runs = chunk_runs_[c];
+      runs.clear();
+      for (const RayUpdate& u : out) {
+        const BlockIndex b = block_of_voxel(u.voxel);
+        if (runs.empty() || runs.back().block != b) runs.push_back(BlockRun{b, 0, -1});
+        ++runs.back().count;
       }
     });
-    // 5. Bucket the updates by block (serial, stable: fixed order per block).
+    // 5. Bucket the updates by block, stable (each block's updates in ray order): the blocks
+    // are touched per run in ray order (serial), each chunk's updates then go to its own
+    // cursors, which start after the earlier chunks' updates of the block (parallel).
     TouchedBlocks touched;
     touched.stamp = map.next_frame_stamp();
     size_t n_updates = 0;
     for (const auto& v : chunk_updates_) n_updates += v.size();
-    update_block_.resize(n_updates);
-    size_t i = 0;
-    BlockIndex last_block(INT32_MIN, INT32_MIN, INT32_MIN);
-    int32_t last_slot = -1;
-    for (const auto& chunk : chunk_updates_)
-      for (const RayUpdate& u : chunk) {
-        const BlockIndex b = block_of_voxel(u.voxel);
-        if (b != last_block) {
-          last_slot = touched.touch(map, b);
-          last_block = b;
-        }
-        update_block_[i++] = last_slot;
-      }
+    for (auto& runs : chunk_runs_)
+      for (BlockRun& run : runs) run.slot = touched.touch(map, run.block);
     const size_t n_blocks = touched.blocks.size();
+    chunk_cursors_.resize(n_chunks);
+    tbb::parallel_for(size_t{0}, n_chunks, [&](size_t c) {
+      chunk_cursors_[c].assign(n_blocks, 0);  // first: the chunk's update count per block
+      for (const BlockRun& run : chunk_runs_[c]) chunk_cursors_[c][run.slot] += run.count;
+    });
     offsets_.assign(n_blocks + 1, 0);
-    for (size_t k = 0; k < n_updates; ++k) ++offsets_[update_block_[k] + 1];
-    for (size_t k = 0; k < n_blocks; ++k) offsets_[k + 1] += offsets_[k];
-    order_.resize(n_updates);
-    {
-      std::vector<size_t> cursor(offsets_.begin(), offsets_.end() - 1);
-      size_t k = 0;
-      for (const auto& chunk : chunk_updates_)
-        for (const RayUpdate& u : chunk) order_[cursor[update_block_[k++]]++] = &u;
+    for (size_t k = 0; k < n_blocks; ++k) {
+      size_t at = offsets_[k];
+      for (size_t c = 0; c < n_chunks; ++c) at += std::exchange(chunk_cursors_[c][k], at);
+      offsets_[k + 1] = at;
     }
+    sorted_.resize(n_updates);
+    tbb::parallel_for(size_t{0}, n_chunks, [&](size_t c) {
+      const RayUpdate* u = chunk_updates_[c].data();
+      for (const BlockRun& run : chunk_runs_[c]) {
+        size_t& cursor = chunk_cursors_[c][run.slot];
+        for (uint32_t j = 0; j < run.count; ++j, ++u)
+          sorted_[cursor++] = BlockUpdate{u->d, u->group, static_cast<uint16_t>(local_index(u->voxel))};
+      }
+    });
     // 6. Apply per block in parallel (each block's updates in ray order: deterministic).
     const VoxelUpdater updater = make_updater(map, f);
-    const bool colour = f.colour && map.has_colour_layer();
-    const bool labels = f.labels && (map.has_label_layer() || map.has_bayes_layer());
+    const ApplyPass pass{updater,
+                         sorted_.data(),
+                         offsets_.data(),
+                         ray_info_.data(),
+                         groups_.data(),
+                         f.label_band,
+                         f.labels && (map.has_label_layer() || map.has_bayes_layer()),
+                         f.colour && map.has_colour_layer(),
+                         want_observation};
+    const bool avx2 = have_avx2_f16c();
     tbb::parallel_for(size_t{0}, n_blocks, [&](size_t k) {
       Block& block = *touched.blocks[k];
-      // Labels: one observation per voxel per frame, from the ray whose surface point is nearest.
-      std::array<float, kBlockVoxels> best_d;
-      std::array<int32_t, kBlockVoxels> best_group;
-      if (labels) best_group.fill(-1);
-      for (size_t j = offsets_[k]; j < offsets_[k + 1]; ++j) {
-        const RayUpdate& u = *order_[j];
-        const Group& g = groups_[u.group];
-        const int li = local_index(u.voxel);
-        if (!updater.update(block, li, u.d, g.total_weight, 0, nullptr, colour ? &g.colour : nullptr)) continue;
-        if (labels && g.label != 0 && std::fabs(u.d) <= f.label_band &&
-            (best_group[li] < 0 || std::fabs(u.d) < best_d[li])) {
-          best_group[li] = u.group;
-          best_d[li] = std::fabs(u.d);
-        }
-      }
-      if (labels)
-        for (int li = 0; li < kBlockVoxels; ++li)
-          if (best_group[li] >= 0) {
-            const Group& g = groups_[best_group[li]];
-            updater.update_labels(block, li, g.label, want_observation ? &g.observation : nullptr);
-          }
+      if (avx2) apply_block_avx2(block, k, pass);
+      else apply_block_sse2(block, k, pass);
       block.mesh_dirty = true;
     });
     stats_.voxel_updates = n_updates;
     stats_.touched_blocks = n_blocks;
     stats_.allocated_blocks = touched.allocated;
+  }
+
+  /// The group of voxel key `key`, a new one (the next id) when absent (B5 grouping).
+  int32_t find_or_add_group(uint64_t key) {
+    size_t mask = table_.size() - 1;
+    for (size_t h = mix_key(key) & mask;; h = (h + 1) & mask) {
+      const int32_t g = table_[h];
+      if (g >= 0 && groups_[g].key == key) return g;
+      if (g >= 0) continue;
+      const int32_t added = static_cast<int32_t>(groups_.size());
+      groups_.push_back(Group{key, -1, 0.0f, Eigen::Vector3f::Zero(), 0, {}, {}});
+      if (2 * groups_.size() <= table_.size()) {
+        table_[h] = added;
+        return added;
+      }
+      table_.assign(2 * table_.size(), -1);  // grow: re-insert every group, the new one too
+      mask = table_.size() - 1;
+      for (size_t k = 0; k < groups_.size(); ++k) {
+        size_t j = mix_key(groups_[k].key) & mask;
+        while (table_[j] >= 0) j = (j + 1) & mask;
+        table_[j] = static_cast<int32_t>(k);
+      }
+      return added;
+    }
+  }
+
+  /// B6 for the updates of block k in ray order, then one label observation per voxel, from the
+  /// ray whose surface point is nearest.
+  template <bool kNativeHalf>
+  [[gnu::always_inline]] static void apply_block(Block& block, size_t k, const ApplyPass& p) {
+    std::array<float, kBlockVoxels> best_d;
+    std::array<int32_t, kBlockVoxels> best_group;
+    if (p.labels) best_group.fill(-1);
+    for (size_t j = p.offsets[k]; j < p.offsets[k + 1]; ++j) {
+      const BlockUpdate& u = p.updates[j];
+      const RayInfo& ray = p.rays[u.group];
+      const int li = u.li;
+      if (!p.updater.update<kNativeHalf>(block, li, u.d, ray.weight, 0, nullptr, p.colour ? &ray.colour : nullptr)) continue;
+      if (p.labels && ray.label != 0 && std::fabs(u.d) <= p.label_band && (best_group[li] < 0 || std::fabs(u.d) < best_d[li])) {
+        best_group[li] = u.group;
+        best_d[li] = std::fabs(u.d);
+      }
+    }
+    if (p.labels)
+      for (int li = 0; li < kBlockVoxels; ++li)
+        if (best_group[li] >= 0) {
+          const Group& g = p.groups[best_group[li]];
+          p.updater.update_labels(block, li, g.label, p.observation ? &g.observation : nullptr);
+        }
+  }
+  /// Baseline and AVX2+F16C builds, as the projective integrator's integrate_block_*.
+  static void apply_block_sse2(Block& block, size_t k, const ApplyPass& p) { apply_block<false>(block, k, p); }
+  SEMAP_TARGET_AVX2 static void apply_block_avx2(Block& block, size_t k, const ApplyPass& p) {
+    apply_block<true>(block, k, p);
   }
 
   /// Bayesian observation of a group from per-pixel probabilities: the weighted mean
@@ -460,14 +616,260 @@ class GroupedIntegrator final : public ArenaIntegrator {
   std::vector<Group> groups_;
   std::vector<LabelSlot> slots_;
   std::vector<std::vector<RayUpdate>> chunk_updates_;
-  std::vector<int32_t> update_block_;
+  std::vector<std::vector<BlockRun>> chunk_runs_;
+  std::vector<std::vector<size_t>> chunk_cursors_;  ///< per chunk, per touched block
   std::vector<size_t> offsets_;
-  std::vector<const RayUpdate*> order_;
+  std::vector<BlockUpdate> sorted_;
+  std::vector<RayInfo> ray_info_;
 };
 
 // =============================================================================================
 // Projective integration (nvblox / Open3D style)
 // =============================================================================================
+/// What the voxel loop reads of one pixel, packed: its random reads of depth, colour and label
+/// images were three cache misses per voxel (the loop's hottest instructions), now one.
+struct PixelSample {
+  float depth = 0.0f;  ///< metres, 0 = not usable
+  Rgb8 rgb;            ///< from the BGR colour image (zero without one)
+  ClassId label = 0;   ///< 0 without a label image
+};
+static_assert(sizeof(PixelSample) == 8);
+
+/// Row v of the frame as samples (a sequential pass over each input image).
+void fill_samples(const IntegrationInput& in, const FrameSetup& f, int v, PixelSample* out) {
+  const float* depth = in.depth.ptr<float>(v);
+  for (int u = 0; u < f.width; ++u) out[u].depth = usable_depth(depth[u], f.min_range, f.max_range) ? depth[u] : 0.0f;
+  if (f.colour) {
+    const uint8_t* bgr = in.colour.ptr<uint8_t>(v);
+    for (int u = 0; u < f.width; ++u) out[u].rgb = Rgb8{bgr[3 * u + 2], bgr[3 * u + 1], bgr[3 * u]};
+  }
+  const uint8_t* labels = f.labels ? in.labels.ptr<uint8_t>(v) : nullptr;
+  for (int u = 0; u < f.width; ++u) out[u].label = labels ? labels[u] : 0;
+}
+
+/// One image row for projective step 1 (block units): its samples, the camera rays' x per
+/// column and 1/norm per pixel, the row's ray at x = 0, the ray step per unit x, the camera.
+struct BandRow {
+  const PixelSample* samples;
+  const float* ray_x;
+  const float* inv_norm;
+  Eigen::Vector3f row_ray, col0, t_blocks;
+  float delta;
+  int width, stride;
+};
+using RecentKeys = std::array<uint64_t, 64>;  ///< direct-mapped: keys seen lately
+
+/// Appends the keys of the blocks crossed by the truncation bands of the row's strided usable
+/// pixels (first sightings per `recent`); returns those pixels' number. The band ends of 8
+/// pixels are computed per step, lane by lane as the per-pixel Eigen expressions (same float
+/// operations: same cells), then each pixel's cells are visited.
+template <bool kWide>
+[[gnu::always_inline]] inline size_t band_blocks(const BandRow& r, RecentKeys& recent, std::vector<uint64_t>& out) {
+  constexpr int kLanes = 8;
+  auto visit = [&](const Eigen::Vector3i& blk) {
+    if (!key_in_range(blk)) return;
+    const uint64_t key = pack_key(blk);
+    uint64_t& seen = recent[(key * 0x9E3779B97F4A7C15ULL) >> 58];  // any hash: first sightings are kept
+    if (seen == key) return;
+    seen = key;
+    out.push_back(key);
+  };
+  size_t valid = 0;
+  for (int u0 = 0; u0 < r.width; u0 += kLanes * r.stride) {
+    std::array<float, kLanes> z, x, inv_norm;
+    for (int l = 0; l < kLanes; ++l) {
+      const int u = u0 + l * r.stride;
+      const int uc = u < r.width ? u : 0;
+      z[l] = u < r.width ? r.samples[uc].depth : 0.0f;
+      x[l] = r.ray_x[uc];
+      inv_norm[l] = r.inv_norm[uc];
+    }
+    std::array<float, kLanes> a[3], b[3], t_max[3], t_delta[3], s_near, s_far;
+    std::array<int, kLanes> ca[3], cb[3], n, step[3];
+    for (int l = 0; l < kLanes; ++l) {
+      // The pixel's point is z * ray (camera frame), at distance z / inv_norm; the band
+      // [dist - delta, dist + delta] along the ray, in block units (no division per pixel).
+      const float band = r.delta * inv_norm[l], near = z[l] - band;
+      s_near[l] = 0.0f < near ? near : 0.0f;  // std::max(0, near)
+      s_far[l] = z[l] + band;
+      n[l] = 1;
+    }
+    for (int i = 0; i < 3; ++i) {  // per axis, 8 lanes per step (branch-free: vectorised)
+      const float row_ray = r.row_ray[i], col0 = r.col0[i], t = r.t_blocks[i];
+      constexpr float kInf = std::numeric_limits<float>::infinity();
+      for (int l = 0; l < kLanes; ++l) {
+        const float ray = row_ray + col0 * x[l], pa = t + ray * s_near[l], pb = t + ray * s_far[l];
+        a[i][l] = pa;
+        b[i][l] = pb;
+        const int ta = static_cast<int>(pa), tb = static_cast<int>(pb);  // floor_cells
+        const int fa = ta - static_cast<int>(pa < static_cast<float>(ta)), fb = tb - static_cast<int>(pb < static_cast<float>(tb));
+        ca[i][l] = fa;
+        cb[i][l] = fb;
+        n[l] += fb > fa ? fb - fa : fa - fb;
+        // traverse_steps' set-up, for every pixel (used where n > 2): the same quotients.
+        const float dir = pb - pa;
+        const int st = static_cast<int>(dir > 0) - static_cast<int>(dir < 0);
+        step[i][l] = st;
+        const float q_max = (static_cast<float>(fa + static_cast<int>(st > 0)) - pa) / dir, q_delta = static_cast<float>(st) / dir;
+        t_max[i][l] = st == 0 ? kInf : q_max;
+        t_delta[i][l] = st == 0 ? kInf : q_delta;
+      }
+    }
+    // The usable pixels split without branches into short segments (n <= 2: as traverse_cells,
+    // the end cells are all they cross; visiting c twice when n = 1 emits nothing new) and
+    // stepped ones: a branch per pixel on n mispredicted about every other pixel.
+    std::array<int8_t, kLanes> short_lanes, long_lanes;
+    int n_short = 0, n_long = 0;
+    for (int l = 0; l < kLanes; ++l) {
+      const bool usable = z[l] != 0.0f;
+      short_lanes[n_short] = static_cast<int8_t>(l);
+      long_lanes[n_long] = static_cast<int8_t>(l);
+      n_short += usable & (n[l] <= 2);
+      n_long += usable & (n[l] > 2);
+    }
+    valid += static_cast<size_t>(n_short + n_long);
+    for (int i = 0; i < n_short; ++i) {
+      const int l = short_lanes[i];
+      visit(Eigen::Vector3i(ca[0][l], ca[1][l], ca[2][l]));
+      visit(Eigen::Vector3i(cb[0][l], cb[1][l], cb[2][l]));
+    }
+    for (int i = 0; i < n_long; ++i) {
+      const int l = long_lanes[i];
+      step_cells({ca[0][l], ca[1][l], ca[2][l]}, {step[0][l], step[1][l], step[2][l]},
+                 {t_max[0][l], t_max[1][l], t_max[2][l]}, {t_delta[0][l], t_delta[1][l], t_delta[2][l]}, n[l], visit);
+    }
+  }
+  return valid;
+}
+size_t band_blocks_sse2(const BandRow& r, RecentKeys& recent, std::vector<uint64_t>& out) {
+  return band_blocks<false>(r, recent, out);
+}
+SEMAP_TARGET_AVX2 size_t band_blocks_avx2(const BandRow& r, RecentKeys& recent, std::vector<uint64_t>& out) {
+  return band_blocks<true>(r, recent, out);
+}
+
+/// Frame constants of the voxel projection, as values (voxel stores, bytes that may alias
+/// anything, would otherwise make every iteration reload them from the frame set-up).
+struct ProjectionFrame {
+  float fx, fy, cx, cy, min_range, delta, width, height;
+  int width_px;
+  const PixelSample* samples;  ///< width x height, then one unusable sample
+  int32_t off_image;           ///< index of that unusable sample
+};
+
+/// The voxels of one block the frame updates (METHODS B6: a usable pixel, d > -delta): the
+/// first `count` entries of voxel (local index), pixel and sdf (along the ray). Pass 1's
+/// per-voxel geometry is indexed column-major (y fastest: t = y + 8 (x + 8 z)).
+struct BlockHits {
+  std::array<int32_t, kBlockVoxels> column_pixel;
+  std::array<float, kBlockVoxels> column_z, column_norm, column_inv_z;
+  std::array<int32_t, kBlockVoxels> pixel;
+  std::array<float, kBlockVoxels> sdf;
+  std::array<uint16_t, kBlockVoxels> voxel;
+  int count = 0;
+};
+
+/// Projects the 512 voxels of a block (camera-frame centre of voxel 0 and the per-axis steps)
+/// without branches. Pass 1 finds every voxel's pixel (nearest; the unusable off-image sample
+/// when behind the camera or outside) 8 voxels at a time: the 8 rows y of a block column, each
+/// lane stepping along x by + step_x as one voxel-row loop would (the same float operations,
+/// so the same pixels and distances, now vectorised). Pass 2 reads all their depths with
+/// independent loads (the cache misses overlap instead of serialising behind mispredicted
+/// branches) and lists the voxels to update.
+[[gnu::always_inline]] inline void project_block(const Eigen::Vector3f& base, const Eigen::Vector3f& step_x, const Eigen::Vector3f& step_y,
+                          const Eigen::Vector3f& step_z, const ProjectionFrame& f, BlockHits& h) {
+  const float sx = step_x.x(), sy = step_x.y(), sz = step_x.z();
+  for (int z = 0; z < kBlockSide; ++z) {
+    std::array<float, kBlockSide> px, py, pz;  // camera-frame voxel centres of column x, by y
+    for (int y = 0; y < kBlockSide; ++y) {
+      const Eigen::Vector3f row = base + step_y * static_cast<float>(y) + step_z * static_cast<float>(z);
+      px[y] = row.x(), py[y] = row.y(), pz[y] = row.z();
+    }
+    for (int x = 0; x < kBlockSide; ++x) {
+      const int t0 = kBlockSide * (x + kBlockSide * z);
+      for (int y = 0; y < kBlockSide; ++y) {
+        const float cz = pz[y], inv_z = 1.0f / cz;
+        // Nearest pixel: floor(x + 0.5). For x in [0, W) truncation is that floor; the test on
+        // the float (false for NaN too) skips the same pixels as floor(x) outside [0, W).
+        const float x_pix = f.fx * px[y] * inv_z + f.cx + 0.5f, y_pix = f.fy * py[y] * inv_z + f.cy + 0.5f;
+        const bool in_image = (cz > f.min_range) & (x_pix >= 0.0f) & (x_pix < f.width) & (y_pix >= 0.0f) & (y_pix < f.height);
+        h.column_pixel[t0 + y] = in_image ? static_cast<int>(y_pix) * f.width_px + static_cast<int>(x_pix) : f.off_image;
+        h.column_z[t0 + y] = cz;
+        h.column_norm[t0 + y] = std::sqrt(px[y] * px[y] + (py[y] * py[y] + cz * cz));  // Eigen's norm() order
+        h.column_inv_z[t0 + y] = inv_z;
+        px[y] += sx, py[y] += sy, pz[y] += sz;
+      }
+    }
+  }
+  int n = 0;
+  for (int t = 0; t < kBlockVoxels; ++t) {
+    const int32_t pixel = h.column_pixel[t];
+    const float depth = f.samples[pixel].depth;
+    const float sdf = (depth - h.column_z[t]) * h.column_norm[t] * h.column_inv_z[t];  // along the ray
+    h.pixel[n] = pixel;
+    h.sdf[n] = sdf;
+    h.voxel[n] = static_cast<uint16_t>(((t >> 3) & 7) | ((t & 7) << 3) | (t & ~63));  // x + 8 y + 64 z
+    n += depth != 0.0f && !(sdf <= -f.delta);
+  }
+  h.count = n;
+}
+
+/// What the per-block voxel work of one projective frame reads.
+struct BlockPass {
+  const VoxelUpdater& updater;
+  const ProjectionFrame& frame;
+  const FrameSetup& f;
+  const IntegrationInput& in;
+  const ClassDistribution* label_observations;  ///< by label: labels without confidence (A6)
+  const ClassDistribution* pixel_observations;  ///< by pixel: probability images, else null
+  float block_size;
+  bool bayes, colour;
+};
+
+/// Projects a block's voxels and applies B6 (+ labels, colour) to those the frame updates;
+/// returns their number. Passes 1-2 branch-free (project_block), pass 3 updates the hits.
+template <bool kNativeHalf>
+[[gnu::always_inline]] inline size_t integrate_block(Block& block, const BlockPass& p) {
+  const FrameSetup& f = p.f;
+  const Eigen::Vector3f origin = block.index.cast<float>() * p.block_size + Eigen::Vector3f::Constant(0.5f * f.s);
+  const Eigen::Vector3f base = f.R_cw * origin + f.t_cw;
+  const Eigen::Vector3f step_x = f.R_cw.col(0) * f.s, step_y = f.R_cw.col(1) * f.s, step_z = f.R_cw.col(2) * f.s;
+  BlockHits hits;
+  project_block(base, step_x, step_y, step_z, p.frame, hits);
+  size_t n = 0;
+  ClassDistribution confidence_observation;  // outside the loop: not zeroed per voxel
+  for (int j = 0; j < hits.count; ++j) {
+    const int li = hits.voxel[j];
+    const size_t pix = static_cast<size_t>(hits.pixel[j]);
+    const PixelSample& sample = p.frame.samples[pix];  // in cache since pass 2
+    const float depth = sample.depth, sdf = hits.sdf[j];
+    const ClassId label = sample.label;
+    const ClassDistribution* obs = nullptr;
+    if (p.bayes && label != 0) {
+      if (p.pixel_observations) {
+        obs = &p.pixel_observations[pix];
+      } else if (f.confidence) {
+        const size_t W = static_cast<size_t>(f.width);
+        const float c = std::clamp(p.in.confidence.ptr<float>(static_cast<int>(pix / W))[pix % W], 0.01f, 0.999f);
+        confidence_observation = ClassDistribution::from_label(label, c, f.confusion_classes);
+        obs = &confidence_observation;
+      } else {
+        obs = &p.label_observations[label];
+      }
+    }
+    n += p.updater.update<kNativeHalf>(block, li, sdf, 1.0f / (depth * depth), label, obs, p.colour ? &sample.rgb : nullptr);
+  }
+  return n;
+}
+
+/// The baseline x86-64 build (SSE2, hand-rolled binary16) and one for CPUs with AVX2 and F16C
+/// (16 voxels per pass-1 step, hardware binary16), chosen at run time. No FMA in either: the
+/// same roundings, so the same map (checked by bench_tsdf's map_checksum).
+size_t integrate_block_sse2(Block& block, const BlockPass& p) { return integrate_block<false>(block, p); }
+SEMAP_TARGET_AVX2 size_t integrate_block_avx2(Block& block, const BlockPass& p) {
+  return integrate_block<true>(block, p);
+}
+
 class ProjectiveIntegrator final : public ArenaIntegrator {
  public:
   explicit ProjectiveIntegrator(const TsdfConfig& cfg) : ArenaIntegrator(cfg) {}
@@ -482,46 +884,35 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
     const int kRowsPerChunk = 8 * stride;
     const int n_chunks = (H + kRowsPerChunk - 1) / kRowsPerChunk;
     chunk_blocks_.resize(n_chunks);
-    usable_depth_.resize(static_cast<size_t>(W) * H);
+    samples_.resize(static_cast<size_t>(W) * H + 1);  // + the unusable pixel off-image voxels read
+    samples_.back() = PixelSample{};
     rays_.update(f);
     const Eigen::Matrix3f R_blocks = f.R_wc / block_size;  // camera -> world, in block units
     const Eigen::Vector3f t_blocks = f.t_wc / block_size;
     std::vector<size_t> valid(n_chunks, 0);
+    const bool avx2 = have_avx2_f16c();
     tbb::parallel_for(0, n_chunks, [&](int c) {
       std::vector<uint64_t>& out = chunk_blocks_[c];
       out.clear();
       // Small direct-mapped cache to skip repeated keys of neighbouring pixels.
-      std::array<uint64_t, 64> recent;
+      RecentKeys recent;
       recent.fill(~0ULL);
       for (int v = c * kRowsPerChunk; v < std::min(H, (c + 1) * kRowsPerChunk); ++v) {
-        // Every row, in one sequential pass: the depth (0 = unusable) that step 2 looks up at
-        // random comes from this warm copy instead of a cold frame (its misses were the voxel
-        // loop's hottest instruction).
-        const float* depth = in.depth.ptr<float>(v);
-        float* usable = &usable_depth_[static_cast<size_t>(v) * W];
-        for (int u = 0; u < W; ++u) usable[u] = usable_depth(depth[u], f.min_range, f.max_range) ? depth[u] : 0.0f;
+        // Every row, in one sequential pass: the depth (0 = unusable), colour and label that
+        // step 2 looks up at random come from this warm packed copy (PixelSample).
+        PixelSample* samples = &samples_[static_cast<size_t>(v) * W];
+        fill_samples(in, f, v, samples);
         if (v % stride != 0) continue;
-        const float ray_y = rays_.y[v];
-        const Eigen::Vector3f row_ray = R_blocks * Eigen::Vector3f(0.0f, ray_y, 1.0f);
-        for (int u = 0; u < W; u += stride) {
-          const float z = usable[u];
-          if (z == 0.0f) continue;
-          ++valid[c];
-          // The pixel's point is z * ray (camera frame), at distance z / inv_norm; the band
-          // [dist - delta, dist + delta] along the ray, in block units (no division per pixel).
-          const Eigen::Vector3f ray = row_ray + R_blocks.col(0) * rays_.x[u];
-          const float band = f.delta * rays_.inv_norm[static_cast<size_t>(v) * W + u];
-          const Eigen::Vector3f a = t_blocks + ray * std::max(0.0f, z - band);
-          const Eigen::Vector3f b = t_blocks + ray * (z + band);
-          traverse_cells(a, b, [&](const Eigen::Vector3i& blk) {
-            if (!key_in_range(blk)) return;
-            const uint64_t key = pack_key(blk);
-            uint64_t& r = recent[mix_key(key) & 63];
-            if (r == key) return;
-            r = key;
-            out.push_back(key);
-          });
-        }
+        const BandRow row{samples,
+                          rays_.x.data(),
+                          &rays_.inv_norm[static_cast<size_t>(v) * W],
+                          R_blocks * Eigen::Vector3f(0.0f, rays_.y[v], 1.0f),
+                          R_blocks.col(0),
+                          t_blocks,
+                          f.delta,
+                          W,
+                          stride};
+        valid[c] += avx2 ? band_blocks_avx2(row, recent, out) : band_blocks_sse2(row, recent, out);
       }
     });
     TouchedBlocks touched;
@@ -550,7 +941,6 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
     // 2. Project every voxel of every touched block (parallel per block).
     const VoxelUpdater updater = make_updater(map, f);
     const bool colour = f.colour && map.has_colour_layer();
-    const float width = static_cast<float>(W), height = static_cast<float>(H);
     std::vector<size_t> updates(touched.blocks.size(), 0);
     // Label-only observations depend on the label alone: one per class, not one per voxel (A6).
     if (bayes && !f.probabilities && !f.confidence)
@@ -559,65 +949,13 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
             ClassDistribution::from_label(static_cast<ClassId>(l), f.default_confidence, f.confusion_classes);
     // Frame constants as locals: the voxel stores (bytes, which may alias anything) would
     // otherwise make every iteration reload them.
-    const float fx = f.fx, fy = f.fy, cx = f.cx, cy = f.cy, min_range = f.min_range, delta = f.delta;
-    const float* usable_depth = usable_depth_.data();
+    const ProjectionFrame frame{f.fx, f.fy, f.cx, f.cy, f.min_range, f.delta, static_cast<float>(W),
+                                static_cast<float>(H), W, samples_.data(), static_cast<int32_t>(static_cast<size_t>(W) * H)};
+    const BlockPass pass{updater, frame, f, in, label_observations_.data(),
+                         bayes && f.probabilities ? pixel_observations_.data() : nullptr, block_size, bayes, colour};
     tbb::parallel_for(size_t{0}, touched.blocks.size(), [&](size_t k) {
       Block& block = *touched.blocks[k];
-      const Eigen::Vector3f origin = block.index.cast<float>() * block_size + Eigen::Vector3f::Constant(0.5f * f.s);
-      const Eigen::Vector3f base = f.R_cw * origin + f.t_cw;
-      const Eigen::Vector3f step_x = f.R_cw.col(0) * f.s, step_y = f.R_cw.col(1) * f.s, step_z = f.R_cw.col(2) * f.s;
-      // Pass 1, branch-free: every voxel's pixel (u = -1 when behind the camera or off the image)
-      // and ray geometry; pass 2 then branches only on the voxels that project into the image.
-      std::array<int32_t, kBlockVoxels> voxel_u, voxel_v;
-      std::array<float, kBlockVoxels> voxel_z, voxel_norm, voxel_inv_z;
-      for (int z = 0; z < kBlockSide; ++z)
-        for (int y = 0; y < kBlockSide; ++y) {
-          Eigen::Vector3f pc = base + step_y * static_cast<float>(y) + step_z * static_cast<float>(z);
-          for (int x = 0; x < kBlockSide; ++x, pc += step_x) {
-            const int li = x + kBlockSide * (y + kBlockSide * z);
-            const float inv_z = 1.0f / pc.z();
-            // Nearest pixel: floor(x + 0.5). For x in [0, W) truncation is that floor; the test on
-            // the float (false for NaN too) skips the same pixels as floor(x) outside [0, W).
-            const float x_pix = fx * pc.x() * inv_z + cx + 0.5f, y_pix = fy * pc.y() * inv_z + cy + 0.5f;
-            const bool in_image =
-                pc.z() > min_range && x_pix >= 0.0f && x_pix < width && y_pix >= 0.0f && y_pix < height;
-            voxel_u[li] = in_image ? static_cast<int>(x_pix) : -1;
-            voxel_v[li] = in_image ? static_cast<int>(y_pix) : -1;
-            voxel_z[li] = pc.z();
-            voxel_norm[li] = pc.norm();
-            voxel_inv_z[li] = inv_z;
-          }
-        }
-      size_t n = 0;
-      for (int li = 0; li < kBlockVoxels; ++li) {
-        const int u = voxel_u[li], v = voxel_v[li];
-        if (u < 0) continue;
-        const size_t pix = static_cast<size_t>(v) * W + u;
-        const float depth = usable_depth[pix];
-        if (depth == 0.0f) continue;
-        const float sdf = (depth - voxel_z[li]) * voxel_norm[li] * voxel_inv_z[li];  // along the ray
-        if (sdf <= -delta) continue;
-        const ClassId label = f.labels ? in.labels.ptr<uint8_t>(v)[u] : 0;
-        ClassDistribution confidence_observation;
-        const ClassDistribution* obs = nullptr;
-        if (bayes && label != 0) {
-          if (f.probabilities) {
-            obs = &pixel_observations_[pix];
-          } else if (f.confidence) {
-            const float c = std::clamp(in.confidence.ptr<float>(v)[u], 0.01f, 0.999f);
-            confidence_observation = ClassDistribution::from_label(label, c, f.confusion_classes);
-            obs = &confidence_observation;
-          } else {
-            obs = &label_observations_[label];
-          }
-        }
-        Rgb8 rgb;
-        if (colour) {
-          const uint8_t* bgr = in.colour.ptr<uint8_t>(v) + 3 * u;
-          rgb = Rgb8{bgr[2], bgr[1], bgr[0]};
-        }
-        n += updater.update(block, li, sdf, 1.0f / (depth * depth), label, obs, colour ? &rgb : nullptr);
-      }
+      const size_t n = avx2 ? integrate_block_avx2(block, pass) : integrate_block_sse2(block, pass);
       if (n) block.mesh_dirty = true;
       updates[k] = n;
     });
@@ -648,7 +986,8 @@ class ProjectiveIntegrator final : public ArenaIntegrator {
 
   std::vector<std::vector<uint64_t>> chunk_blocks_;
   PixelRays rays_;
-  std::vector<float> usable_depth_;  ///< the frame's depth, 0 where not usable (step 1 -> step 2)
+  /// The frame per pixel (step 1 -> step 2): depth (0 where not usable), colour, label.
+  std::vector<PixelSample> samples_;
   std::vector<ClassDistribution> pixel_observations_;
   std::array<ClassDistribution, kNumClasses> label_observations_;  ///< by label, labels without confidence
 };

@@ -92,11 +92,17 @@ void BayesLayerCodec::update(uint8_t* voxel, const ClassDistribution& observatio
   for (int i = 0; i < n; ++i) z += posterior[i];
   if (!(z > 0)) return;
   // Sort candidates by posterior (ties by class id) and keep the top k.
+  // Insertion sort: n <= 2 kMaxTopK, mostly already in order (the prior's order), where it does
+  // a comparison per candidate; the order is total (distinct classes), so any sort gives it.
   std::array<int, 2 * kMaxTopK> order{};
-  for (int i = 0; i < n; ++i) order[i] = i;
-  std::sort(order.begin(), order.begin() + n, [&](int a, int b) {
+  auto before = [&](int a, int b) {
     return posterior[a] != posterior[b] ? posterior[a] > posterior[b] : classes[a] < classes[b];
-  });
+  };
+  for (int i = 0; i < n; ++i) {
+    int j = i;
+    for (; j > 0 && before(i, order[j - 1]); --j) order[j] = order[j - 1];
+    order[j] = i;
+  }
   const float inv_z = 1.0f / z;
   for (int i = 0; i < k_; ++i) {
     if (i < n) {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <random>
 #include <unordered_map>
 
@@ -29,6 +30,23 @@ TEST(HalfFloat, RoundTripsEveryHalf) {
     }
     EXPECT_EQ(float_to_half(f), bits) << h;
   }
+}
+
+// The integrator's AVX2 path converts with F16C (native_*): both must give the hand-rolled
+// values, for every half and for floats across the whole range (every 4099th bit pattern).
+TEST(HalfFloat, NativeConversionsEqualHandRolled) {
+  int mismatches = 0;
+  for (uint32_t h = 0; h < 65536; ++h) {
+    const float a = half_to_float(static_cast<uint16_t>(h)), b = native_half_to_float(static_cast<uint16_t>(h));
+    mismatches += !(std::isnan(a) ? std::isnan(b) : std::memcmp(&a, &b, 4) == 0);
+  }
+  for (uint64_t bits = 0; bits < (1ULL << 32); bits += 4099) {
+    float f;
+    const uint32_t b32 = static_cast<uint32_t>(bits);
+    std::memcpy(&f, &b32, 4);
+    if (!std::isnan(f)) mismatches += float_to_half(f) != native_float_to_half(f);
+  }
+  EXPECT_EQ(mismatches, 0);
 }
 
 TEST(HalfFloat, AccurateToHalfAnUlp) {
@@ -57,6 +75,26 @@ TEST(WeightQuantizer, MonotoneLogScale) {
   }
   EXPECT_EQ(q.encode(1e9f), 255);
   EXPECT_GE(q.encode(1e-9f), 1);  // observed stays observed
+}
+
+// BayesLayerCodec::encode starts from a bucket of the float's top bits; over the floats from
+// the floor to 2 (every 97th bit pattern) it must give the binary search's code.
+TEST(Quantizers, BucketedBayesEncodeEqualsSearch) {
+  for (const double min_p : {1e-5, 1e-3, 0.05}) {
+    const BayesLayerCodec codec(4, min_p);
+    int mismatches = 0;
+    const float lo = static_cast<float>(min_p) * 0.5f, hi = 2.5f;
+    uint32_t bits, end;
+    std::memcpy(&bits, &lo, 4);
+    std::memcpy(&end, &hi, 4);
+    for (; bits < end; bits += 97) {
+      float p;
+      std::memcpy(&p, &bits, 4);
+      const uint8_t expected = p > static_cast<float>(min_p) ? codec.encode_search(p) : 255;
+      mismatches += codec.encode(p) != expected;
+    }
+    EXPECT_EQ(mismatches, 0) << "min_probability " << min_p;
+  }
 }
 
 // The quantisers find codes by a table search (no logarithm per voxel update); the codes must

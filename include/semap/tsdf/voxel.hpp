@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <vector>
 
 #include "semap/core/labels.hpp"
 
@@ -50,6 +51,20 @@ inline float half_to_float(uint16_t h) {
   float f;
   std::memcpy(&f, &x, 4);
   return f;
+}
+
+/// The same conversions by the compiler's _Float16: F16C instructions where the calling
+/// function is built for them (the integrator's AVX2 path), library code elsewhere.
+[[gnu::always_inline]] inline uint16_t native_float_to_half(float value) {
+  const _Float16 h = static_cast<_Float16>(value);
+  uint16_t bits;
+  std::memcpy(&bits, &h, 2);
+  return bits;
+}
+[[gnu::always_inline]] inline float native_half_to_float(uint16_t bits) {
+  _Float16 h;
+  std::memcpy(&h, &bits, 2);
+  return static_cast<float>(h);
 }
 
 // ---- core voxel (METHODS B3) ----
@@ -145,6 +160,7 @@ class BayesLayerCodec {
     // lower_[q]: p above it rounds to q or less (q = round(-ln p / step)); decreasing in q.
     // A search replaces a logarithm per class per labelled voxel update.
     for (int q = 0; q < 255; ++q) lower_[q] = std::exp(-(q + 0.5) * step_);
+    build_encode_buckets();
   }
   int k() const { return k_; }
   int bytes_per_voxel() const { return 2 * k_; }
@@ -152,7 +168,19 @@ class BayesLayerCodec {
   uint8_t encode(float p) const {
     if (!(p > min_p_)) return 255;
     const double pd = p;
-    // First q whose bound is below p (lower_ is decreasing; a tie rounds up, as lround does).
+    // The float's top 16 bits (sign, exponent, 7 mantissa bits) pick a bucket of p values
+    // narrower than one code step; the scan from its first code takes 1-2 comparisons
+    // instead of a binary search's 8 (same first q with lower_[q] < p, see encode_search).
+    uint32_t bits;
+    std::memcpy(&bits, &p, 4);
+    const uint32_t b = (bits >> 16) - bucket_base_;
+    if (b >= bucket_start_.size()) return encode_search(pd);
+    int q = bucket_start_[b];
+    while (q < 255 && lower_[q] >= pd) ++q;
+    return static_cast<uint8_t>(q);
+  }
+  /// encode by binary search (the reference of encode's buckets): the first q whose bound is below p (lower_ is decreasing; a tie rounds up, as lround does).
+  uint8_t encode_search(double pd) const {
     const auto it = std::lower_bound(lower_.begin(), lower_.end(), pd, [](double bound, double x) { return bound >= x; });
     return static_cast<uint8_t>(it - lower_.begin());
   }
@@ -177,10 +205,31 @@ class BayesLayerCodec {
   double min_probability() const { return min_p_; }
 
  private:
+  /// bucket_start_[b]: the code of the largest float of bucket b (top 16 bits bucket_base_ + b),
+  /// for the positive floats from min_probability to 2 (a posterior is at most ~1).
+  void build_encode_buckets() {
+    const float lo = static_cast<float>(min_p_), hi = 2.0f;
+    uint32_t lo_bits, hi_bits;
+    std::memcpy(&lo_bits, &lo, 4);
+    std::memcpy(&hi_bits, &hi, 4);
+    bucket_base_ = lo_bits >> 16;
+    const uint32_t n = (hi_bits >> 16) - bucket_base_;
+    if (!(min_p_ > 0) || n > (1u << 16)) return;  // no buckets: every encode searches
+    bucket_start_.resize(n);
+    for (uint32_t b = 0; b < n; ++b) {
+      const uint32_t top_bits = ((bucket_base_ + b + 1) << 16) - 1;
+      float top;
+      std::memcpy(&top, &top_bits, 4);
+      bucket_start_[b] = encode_search(top);
+    }
+  }
+
   int k_;
   double min_p_, step_;
   std::array<float, 256> table_{};
   std::array<double, 255> lower_{};
+  uint32_t bucket_base_ = 0;
+  std::vector<uint8_t> bucket_start_;
 };
 
 /// Compact label rule (METHODS B6 leaves it open): a Boyer-Moore majority vote with one vote
