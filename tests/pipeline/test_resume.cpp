@@ -5,7 +5,6 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
-#include <fstream>
 
 #include "core/progress.hpp"
 #include "semap/core/error.hpp"
@@ -16,6 +15,7 @@
 #include "semap/pipeline/run_pipeline.hpp"
 #include "synth/synth_config.hpp"
 #include <nlohmann/json.hpp>
+#include "pipeline/resume_support.hpp"
 #include "test_support.hpp"
 
 namespace semap {
@@ -23,31 +23,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string file_bytes(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+using test::file_bytes;
+using test::map_recording;
 
-RunResult map_recording(const fs::path& dataset, const fs::path& out, const fs::path& resume = {}) {
-  RunOptions options;
-  options.dataset = dataset;
-  options.out_dir = out;
-  options.resume_from = resume;
-  options.show_progress = false;
-  SemapConfig config;
-  config.pipeline.threads = 2;
-  return run_pipeline(options, config);
-}
-
-// The joint trajectory: recording 1's poses, then recording 2's frames after recording 1's last
-// timestamp, with one alignment against the ground truth.
-double joint_ate(const Trajectory& gt, const Trajectory& first, const Trajectory& second) {
-  Trajectory joint = first;
-  const double first_end = first.back().timestamp;
-  for (const auto& p : second)
-    if (p.timestamp > first_end) joint.push_back(p);
-  return compute_ate(gt, joint).rmse;
-}
 
 TEST(MapArchive, SaveLoadSaveIsByteIdenticalAndOldOrForeignFilesAreErrorsNamingTheFile) {
   SEMAP_REQUIRE_DATA(tum, "tum_fr1_rpy");

@@ -1,11 +1,10 @@
-// Multi-session maps on shared data (issue 19, CI heavy subset): a second recording resumes into a saved map: relocalised against the saved keyframes, tracked and fused
-// in the same world frame. Checked on a split of a shared sequence with ONE alignment of the
+// Multi-session maps on shared data (issue 19, CI heavy subset): a second recording resumes into
+// a saved map: relocalised against the saved keyframes, tracked and fused in the same world frame. Checked on a split of a shared sequence with ONE alignment of the
 // joint trajectory against the ground truth.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cstdio>
-#include <fstream>
 
 #include "core/progress.hpp"
 #include "semap/core/error.hpp"
@@ -16,6 +15,7 @@
 #include "semap/pipeline/run_pipeline.hpp"
 #include "sequence_slices.hpp"
 #include <nlohmann/json.hpp>
+#include "pipeline/resume_support.hpp"
 #include "test_support.hpp"
 
 namespace semap {
@@ -23,21 +23,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string file_bytes(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-RunResult map_recording(const fs::path& dataset, const fs::path& out, const fs::path& resume = {}) {
-  RunOptions options;
-  options.dataset = dataset;
-  options.out_dir = out;
-  options.resume_from = resume;
-  options.show_progress = false;
-  SemapConfig config;
-  config.pipeline.threads = 2;
-  return run_pipeline(options, config);
-}
+using test::file_bytes;
+using test::map_recording;
 
 // The joint trajectory: recording 1's poses, then recording 2's frames after recording 1's last
 // timestamp, with one alignment against the ground truth.
