@@ -3,6 +3,7 @@
 #include <cctype>
 #include <cstring>
 #include <optional>
+#include <set>
 
 #include "semap/core/error.hpp"
 
@@ -79,9 +80,14 @@ ImageHeader tiff_header(const Bytes& b, const std::string& source) {
   const uint32_t entries = u16(ifd);
   if (!b.has(ifd + 2, size_t{entries} * 12)) bad(source, "TIFF", "directory cut short");
   uint64_t width = 0, height = 0, tile_w = 0, tile_h = 0, samples = 1;
+  std::set<uint32_t> seen;
   for (uint32_t k = 0; k < entries; ++k) {
     const size_t e = ifd + 2 + size_t{k} * 12;
     const uint32_t tag = u16(e), type = u16(e + 2);
+    // libtiff keeps the first of repeated tags, a reader could take the last: a repeated size
+    // tag is ambiguous and refused (fuzz_image: widths 11 then 5, decoded at 11).
+    const bool size_tag = tag == 256 || tag == 257 || tag == 322 || tag == 323 || tag == 277;
+    if (size_tag && !seen.insert(tag).second) bad(source, "TIFF", "tag " + std::to_string(tag) + " appears twice");
     const uint64_t value = type == 3 ? u16(e + 8) : type == 4 ? u32(e + 8) : 0;  // SHORT / LONG
     if (tag == 256) width = value;
     else if (tag == 257) height = value;

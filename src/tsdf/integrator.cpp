@@ -6,6 +6,7 @@
 #include <tbb/task_arena.h>
 
 #if defined(__x86_64__) || defined(__i386__)
+#include <cpuid.h>
 #include <emmintrin.h>
 #define SEMAP_TSDF_X86 1
 // The integrators' per-block work is also built for AVX2 + F16C, chosen at run time.
@@ -135,8 +136,12 @@ VoxelUpdater make_updater(const TsdfMap& map, const FrameSetup& f) {
 /// variable SEMAP_TSDF_BASELINE_ISA forces the baseline builds (to check both give one map).
 bool have_avx2_f16c() {
 #ifdef SEMAP_TSDF_X86
-  static const bool yes =
-      !std::getenv("SEMAP_TSDF_BASELINE_ISA") && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("f16c");
+  // F16C through cpuid: clang 14's __builtin_cpu_supports does not know "f16c".
+  static const bool yes = [] {
+    unsigned eax = 0, ebx = 0, ecx = 0, edx = 0;
+    const bool f16c = __get_cpuid(1, &eax, &ebx, &ecx, &edx) && (ecx & bit_F16C);
+    return !std::getenv("SEMAP_TSDF_BASELINE_ISA") && __builtin_cpu_supports("avx2") && f16c;
+  }();
   return yes;
 #else
   return false;

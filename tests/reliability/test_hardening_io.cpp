@@ -334,6 +334,8 @@ TEST(HardeningConfig, DuplicateKeysExtraDocumentsAndBomsAreHandled) {
   EXPECT_TRUE(mentions(load_error("tsdf: {n: 1, n: 1}\n"), "duplicate key 'n'"));
   EXPECT_TRUE(mentions(load_error("tsdf: {n: 1}\n---\ntsdf: {n: 2}\n"), "second YAML document"));
   EXPECT_TRUE(mentions(load_error("tsdf: {n: 1}\n...\n---\n"), "second YAML document"));
+  // yaml-cpp's LoadAll never ends on a lone ',' (fuzz_dataset_yaml): one line, at once.
+  for (const char* stuck : {",", "tsdf: {n: 1}\n,\n"}) EXPECT_TRUE(mentions(load_error(stuck), "malformed YAML")) << stuck;
   // A UTF-8 byte-order mark (Windows editors) is skipped, the values apply.
   SmallConfig c;
   load_config_string("\xEF\xBB\xBFtsdf:\n  voxel_size: 0.05\n", "bom.yaml", [&](ParamVisitor& v) { c.visit(v); });
