@@ -56,8 +56,10 @@ std::string pcl_reason(const std::string& what) {
 std::string connected_uris() {
   std::string out;
   try {
-    for (const auto& uri : *pcl::io::openni2::OpenNI2DeviceManager::getInstance()->getConnectedDeviceURIs())
-      out += (out.empty() ? "" : ", ") + uri;
+    // Held in a local: a range-for over *temporary() destroys the shared_ptr before the loop
+    // runs (ASan: heap-use-after-free).
+    const auto uris = pcl::io::openni2::OpenNI2DeviceManager::getInstance()->getConnectedDeviceURIs();
+    for (const auto& uri : *uris) out += (out.empty() ? "" : ", ") + uri;
   } catch (const std::exception&) {
   }
   return out.empty() ? "none" : out;

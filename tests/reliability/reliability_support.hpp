@@ -96,11 +96,18 @@ inline void expect_one_line_error(const CommandResult& r, const std::vector<std:
 }
 
 /// Files (relative paths, sorted) under `dir`, symlinks listed as files, without following them.
+/// Also while semap changes the folder (the signal tests poll it during a run): entries that
+/// vanish meanwhile are skipped, paths are made relative lexically, nothing throws.
 inline std::vector<std::string> tree(const fs::path& dir) {
   std::vector<std::string> out;
-  if (!fs::exists(fs::symlink_status(dir))) return out;
-  for (auto it = fs::recursive_directory_iterator(dir); it != fs::recursive_directory_iterator(); ++it)
-    if (!it->is_directory() || it->is_symlink()) out.push_back(fs::relative(it->path(), dir).string());
+  std::error_code ec;
+  if (!fs::exists(fs::symlink_status(dir, ec))) return out;
+  for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::recursive_directory_iterator();
+       it.increment(ec)) {
+    std::error_code entry_ec;
+    const bool folder = it->is_directory(entry_ec) && !it->is_symlink(entry_ec);
+    if (!entry_ec && !folder) out.push_back(it->path().lexically_relative(dir).string());
+  }
   std::sort(out.begin(), out.end());
   return out;
 }
