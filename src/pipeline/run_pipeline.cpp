@@ -148,7 +148,7 @@ void check_run_is_usable(const std::string& input, const MapperStats& stats, con
 }
 
 /// A resumed run whose every frame was held: it never relocalised into the saved map.
-bool never_relocalised_stats(const MapperStats& stats) {
+bool never_relocalised(const MapperStats& stats) {
   return stats.resumed_keyframes > 0 && stats.frames > 0 && stats.held_frames == stats.frames;
 }
 
@@ -202,12 +202,6 @@ std::filesystem::path saved_map_path(const RunOptions& options) {
   return path;
 }
 
-bool same_intrinsics(const PinholeIntrinsics& a, const PinholeIntrinsics& b) {
-  auto near = [](double x, double y) { return std::abs(x - y) <= 1e-6 * std::max(1.0, std::abs(x)); };
-  return a.width == b.width && a.height == b.height && near(a.fx, b.fx) && near(a.fy, b.fy) && near(a.cx, b.cx) &&
-         near(a.cy, b.cy);
-}
-
 std::unique_ptr<Mapper> make_run_mapper(const RunOptions& options, const SemapConfig& config, const FrameSource& source,
                                         std::unique_ptr<Segmenter> segmenter) {
   const SemapConfig mapper_config = mapper_config_for(config, source);
@@ -215,7 +209,7 @@ std::unique_ptr<Mapper> make_run_mapper(const RunOptions& options, const SemapCo
   const std::filesystem::path path = saved_map_path(options);
   auto mapper = Mapper::load(path, mapper_config, std::move(segmenter));
   const PinholeIntrinsics &saved = mapper->camera().depth, &given = source.camera().depth;
-  if (!same_intrinsics(saved, given))
+  if (!(saved == given))
     throw Error(options.dataset, "its depth camera (" + std::to_string(given.width) + "x" + std::to_string(given.height) +
                                      ", fx " + std::to_string(given.fx) + ") is not the one of the saved map " +
                                      path.string() + " (" + std::to_string(saved.width) + "x" +
@@ -282,13 +276,11 @@ MappedSource map_source(const RunOptions& options, const SemapConfig& config, Fr
   if (out.fed == 0 && out.stopped_early) throw_if_interrupted();
   out.reading_ended = Clock::now();
   out.mapper->finish();
-  if (out.mapper->stats().resumed_keyframes > 0 && options.show_progress && !never_relocalised_stats(out.mapper->stats()))
+  if (out.mapper->stats().resumed_keyframes > 0 && options.show_progress && !never_relocalised(out.mapper->stats()))
     std::fprintf(stderr, "semap run: relocalised into the saved map after %zu held frames\n",
                  out.mapper->stats().held_frames);
   return out;
 }
-
-bool never_relocalised(const MappedSource& mapped) { return never_relocalised_stats(mapped.mapper->stats()); }
 
 RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
   config.validate();
@@ -304,7 +296,7 @@ RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
     throw Error(options.dataset, "--poses groundtruth needs a ground-truth trajectory, this input has none");
 
   MappedSource mapped = map_source(options, config, *source);
-  if (never_relocalised(mapped) && dataset && !mapped.stopped_early) {
+  if (never_relocalised(mapped.mapper->stats()) && dataset && !mapped.stopped_early) {
     // Issue 19: not merged at a guessed pose; the recording becomes a map of its own.
     std::fprintf(stderr, "semap run: %s: no frame relocalised into the saved map %s (%zu keyframes tried): "
                          "mapping this recording on its own, not merged\n",
@@ -314,7 +306,7 @@ RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
     mapped = map_source(alone, config, *open_frame_source(options.dataset.string(), options.dataset_options));
     mapped.not_merged = true;
   }
-  const auto [fed, skipped] = std::pair(mapped.fed, mapped.skipped);
+  const size_t fed = mapped.fed, skipped = mapped.skipped;
   const bool stopped_early = mapped.stopped_early;
   const double online_s = std::chrono::duration<double>(mapped.reading_ended - wall_start).count();
   Mapper& mapper = *mapped.mapper;
