@@ -388,6 +388,47 @@ void ObjectMap::merge_stable_pairs(std::vector<char>& remove, OptimisationStats&
   }
 }
 
+int ObjectMap::merge_target(const ObjectInstance& inst) const {
+  int best = -1;
+  double best_overlap = -1.0;
+  for (size_t j = 0; j < instances_.size(); ++j) {
+    const ObjectInstance& here = instances_[j];
+    if (!geometric_overlap(inst, here) || label_divergence(inst, here) > config_.merge_max_js) continue;  // (3), (4)
+    const double o = overlap(inst.points, here, config_.overlap_distance);
+    if (o > best_overlap) best = static_cast<int>(j), best_overlap = o;
+  }
+  return best;
+}
+
+ObjectMapMergeCounts ObjectMap::merge_map(const ObjectMap& other, const Eigen::Isometry3f& T_this_other) {
+  ObjectMapMergeCounts counts;
+  for (const ObjectInstance& source : other.instances()) {
+    ObjectInstance moved = source;
+    moved.points.clear(), moved.colours.clear(), moved.point_frames.clear(), moved.voxel_to_point.clear();
+    moved.point_sum.setZero();
+    moved.bounds.setEmpty();
+    moved.tree.reset();
+    moved.co_association.clear();  // the other map's ids
+    std::vector<Eigen::Vector3f> points;
+    points.reserve(source.points.size());
+    for (const auto& p : source.points) points.push_back(T_this_other * p);
+    add_points(moved, points, source.colours, {kSavedMapFrame});
+    const int target = merge_target(moved);
+    if (target >= 0) {
+      ObjectInstance& into = instances_[static_cast<size_t>(target)];
+      moved.id = 0;  // merge_into must not match it against into's co-association ids
+      merge_into(into, moved);
+      into.state = std::max(into.state, moved.state);
+      ++counts.merged;
+    } else {
+      moved.id = next_id_++;
+      instances_.push_back(std::move(moved));
+      ++counts.added;
+    }
+  }
+  return counts;
+}
+
 OptimisationStats ObjectMap::optimise(size_t step, bool ignore_recency) {
   OptimisationStats stats;
   stats.before = instances_.size();

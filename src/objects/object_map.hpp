@@ -63,6 +63,11 @@ ClassId evidence_class(const std::vector<double>& score_sum, double min_share);
 /// Share of each class in the evidence (sums to 1; all 0 without evidence).
 std::vector<double> evidence_shares(const std::vector<double>& score_sum);
 
+struct ObjectMapMergeCounts {
+  size_t merged = 0;  ///< instances of the other map folded into one of this map
+  size_t added = 0;   ///< instances of the other map added as new objects
+};
+
 struct OptimisationStats {
   size_t before = 0, after_delete = 0, after_merge = 0;  ///< instances in the map around each C5 step
   int promoted = 0, deleted = 0, merged = 0, pairs_checked = 0;
@@ -96,6 +101,14 @@ class ObjectMap {
   /// Per point: id of the instance with the nearest point within max_dist, else 0.
   std::vector<uint32_t> instance_ids_for(const std::vector<Eigen::Vector3f>& points, float max_dist) const;
 
+  /// Map merging (issue 19): the instances of `other` (another recording's map of the same
+  /// place), moved into this map's frame by T_this_other, join this map. One that C5's tests
+  /// (3) geometric overlap and (4) JS divergence pair with an instance here merges into the one
+  /// it overlaps most (the evidence of both: points, class scores, merge and association
+  /// counts); the others are added with new ids. C5's test (2), co-association, has no meaning
+  /// across recordings: the common frame's overlap stands in for it.
+  ObjectMapMergeCounts merge_map(const ObjectMap& other, const Eigen::Isometry3f& T_this_other);
+
   /// Frame of the points of a map saved by an earlier run: no pose correction moves them.
   static constexpr uint32_t kSavedMapFrame = 0xFFFFFFFFu;
   /// The instances as a map.semap section (issue 19; src/objects/object_map_io.cpp).
@@ -127,6 +140,8 @@ class ObjectMap {
   void promote_or_delete(size_t step, bool ignore_recency, std::vector<char>& remove, OptimisationStats& stats);
   /// Extension (absorb_fragments): the deleted instance i's points join a stable one it overlaps.
   void absorb_fragment(size_t i, const std::vector<char>& remove, OptimisationStats& stats);
+  /// The instance here that `inst` overlaps most and passes C5 tests (3) and (4) with, or -1.
+  int merge_target(const ObjectInstance& inst) const;
   /// C5 merge of stable pairs (tests 1-4), until no pair merges.
   void merge_stable_pairs(std::vector<char>& remove, OptimisationStats& stats);
   /// C4 gate (config association_gate): (centroid distance, index) of the instances whose

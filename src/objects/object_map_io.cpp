@@ -98,13 +98,32 @@ std::string ObjectMapper::encode_state() const {
   return std::move(w.bytes());
 }
 
-void ObjectMapper::restore_state(std::string_view bytes, const std::filesystem::path& path) {
+namespace {
+struct MapperSection {
+  size_t step = 0;
+  std::string map_bytes;
+};
+MapperSection read_mapper_section(std::string_view bytes, const std::filesystem::path& path) {
   ByteReader r(bytes, path, kObjectsSection);
-  const auto step = r.get<uint64_t>();
-  const std::string map_bytes = r.get_string();
+  MapperSection out;
+  out.step = static_cast<size_t>(r.get<uint64_t>());
+  out.map_bytes = r.get_string();
   r.expect_end();
-  map_.decode_state(map_bytes, path);
-  step_ = static_cast<size_t>(step);
+  return out;
+}
+}  // namespace
+
+void ObjectMapper::restore_state(std::string_view bytes, const std::filesystem::path& path) {
+  const MapperSection saved = read_mapper_section(bytes, path);
+  map_.decode_state(saved.map_bytes, path);
+  step_ = saved.step;
+}
+
+ObjectMapMergeCounts ObjectMapper::merge_state(std::string_view bytes, const std::filesystem::path& path,
+                                               const Eigen::Isometry3f& T_this_other) {
+  ObjectMap other(config_);
+  other.decode_state(read_mapper_section(bytes, path).map_bytes, path);
+  return map_.merge_map(other, T_this_other);
 }
 
 }  // namespace semap

@@ -76,6 +76,10 @@ class ObjectMapper {
   /// Continues a saved object map: its instances (fixed points, their counts and states) and
   /// step count; objects seen again associate with them (C4). Call before the first frame.
   void restore_state(std::string_view bytes, const std::filesystem::path& path);
+  /// Map merging (issue 19): the saved object map `bytes` of another recording, moved by
+  /// T_this_other, joins this one (ObjectMap::merge_map).
+  ObjectMapMergeCounts merge_state(std::string_view bytes, const std::filesystem::path& path,
+                                   const Eigen::Isometry3f& T_this_other);
 
  private:
   ObjectsConfig config_;

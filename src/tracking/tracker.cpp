@@ -624,19 +624,34 @@ struct Tracker::Impl {
   /// Keyframes a lost frame is registered against: the most similar by ferns (A3), the most
   /// recent ones and the reference (the camera is usually still near where it was lost).
   std::vector<std::shared_ptr<const Keyframe>> relocalisation_candidates(const FernCode& code) const {
-    std::vector<std::pair<double, std::shared_ptr<const Keyframe>>> by_fern;
     std::vector<std::shared_ptr<const Keyframe>> out;
+    auto add = [&](const std::shared_ptr<const Keyframe>& kf) {
+      if (std::find(out.begin(), out.end(), kf) == out.end()) out.push_back(kf);
+    };
+    const auto similar = most_similar_keyframes(code);
+    std::lock_guard<std::mutex> lock(mutex);
+    if (reference >= 0) add(keyframes[reference]);
+    for (const auto& kf : similar) add(kf);
+    for (int i = 0; i < cfg.relocalisation_recent && i < int(keyframes.size()); ++i) add(keyframes[keyframes.size() - 1 - i]);
+    return out;
+  }
+
+  /// The relocalisation_candidates keyframes most similar to `code` by ferns (A3), best first.
+  std::vector<std::shared_ptr<const Keyframe>> most_similar_keyframes(const FernCode& code) const {
+    std::vector<std::pair<double, std::shared_ptr<const Keyframe>>> by_fern;
     std::lock_guard<std::mutex> lock(mutex);
     const auto sims = ferns.similarities(code);
     for (size_t i = 0; i < sims.size(); ++i) by_fern.emplace_back(sims[i], keyframes[ferns.ids()[i]]);
     std::stable_sort(by_fern.begin(), by_fern.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
-    auto add = [&](const std::shared_ptr<const Keyframe>& kf) {
-      if (std::find(out.begin(), out.end(), kf) == out.end()) out.push_back(kf);
-    };
-    if (reference >= 0) add(keyframes[reference]);
-    for (int i = 0; i < int(by_fern.size()) && i < cfg.relocalisation_candidates; ++i) add(by_fern[i].second);
-    for (int i = 0; i < cfg.relocalisation_recent && i < int(keyframes.size()); ++i) add(keyframes[keyframes.size() - 1 - i]);
+    std::vector<std::shared_ptr<const Keyframe>> out;
+    for (int i = 0; i < int(by_fern.size()) && i < cfg.relocalisation_candidates; ++i) out.push_back(by_fern[i].second);
     return out;
+  }
+
+  /// Wide-baseline registration judged as relocalise() judges it: no prior, feature support,
+  /// enough overlap.
+  bool relocalisation_accepted(const Registration& reg) const {
+    return reg.accepted && reg.icp.overlap >= cfg.relocalisation_min_overlap;
   }
 
   /// Registers a lost frame against candidate keyframes (A3) with the wide-baseline effort; only
@@ -648,7 +663,7 @@ struct Tracker::Impl {
       auto kf_pyramid = kf->id == reference ? ref_pyramid : pyramid(kf->depth, kf->gray);
       Registration reg = register_to(features, frame_pyramid, kf->features, kf_pyramid, nullptr,
                                      uint32_t(cfg.seed) + 104729u * uint32_t(kf->id + 1), Effort::wide);
-      if (!reg.accepted || reg.icp.overlap < cfg.relocalisation_min_overlap) continue;
+      if (!relocalisation_accepted(reg)) continue;
       out = reg;
       reference = kf->id;
       ref_pyramid = std::move(kf_pyramid);
@@ -709,6 +724,30 @@ TrackerState Tracker::state() const {
   for (const auto& kf : impl_->keyframes) out.T_world_keyframe.push_back(impl_->kf_pose.at(kf->id));
   out.edges = impl_->graph.edges();
   return out;
+}
+
+std::optional<KeyframeMatch> Tracker::match_keyframe(const Keyframe& other) const {
+  const Impl& t = *impl_;
+  if (int(other.features.points.size()) < t.cfg.ransac_trusted_inliers) return std::nullopt;  // textureless view
+  const auto other_pyramid = t.pyramid(other.depth, other.gray, true);
+  for (const auto& kf : t.most_similar_keyframes(other.code)) {
+    const Registration reg = t.register_to(other.features, other_pyramid, kf->features, t.pyramid(kf->depth, kf->gray),
+                                           nullptr, uint32_t(t.cfg.seed) + 104729u * uint32_t(kf->id + 1), Effort::wide);
+    if (!t.relocalisation_accepted(reg)) continue;
+    KeyframeMatch match;
+    match.keyframe_id = kf->id;
+    match.T_keyframe_other = reg.T_kf_frame;
+    {
+      std::lock_guard<std::mutex> lock(t.mutex);
+      match.T_world_other = orthonormalized(t.kf_pose.at(kf->id) * reg.T_kf_frame);
+    }
+    match.information = t.edge_information(reg.icp);
+    match.inliers = reg.inliers;
+    match.overlap = reg.icp.overlap;
+    match.rmse_m = reg.icp.rmse;
+    return match;
+  }
+  return std::nullopt;
 }
 
 void Tracker::resume(const TrackerState& state) {

@@ -6,6 +6,7 @@
 // Poses: T_world_camera, world = first frame's camera. Every frame is stored relative to its
 // reference keyframe, so corrections of keyframe poses (pose graph) move the frames with them.
 #include <memory>
+#include <optional>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -13,6 +14,7 @@
 #include "semap/core/frame.hpp"
 #include "semap/core/pose.hpp"
 #include "semap/tracking/tracking_config.hpp"
+#include "tracking/registration.hpp"
 
 namespace semap {
 
@@ -59,6 +61,17 @@ struct TrackerStats {
 };
 
 struct TrackerState;  // tracking/tracker_state.hpp
+struct Keyframe;      // tracking/tracker_state.hpp
+
+/// A keyframe of another map registered against this tracker's keyframes (map merging, issue 19).
+struct KeyframeMatch {
+  int keyframe_id = -1;                    ///< this tracker's keyframe it verified against
+  Pose T_world_other = Pose::Identity();   ///< the other keyframe's camera in this tracker's world
+  Pose T_keyframe_other = Pose::Identity();  ///< the registration itself
+  Matrix6d information = Matrix6d::Identity();  ///< of T_keyframe_other (pose-graph edge)
+  int inliers = 0;                         ///< voting-RANSAC inliers
+  double overlap = 0.0, rmse_m = 0.0;      ///< ICP overlap fraction and residual
+};
 
 class Tracker {
  public:
@@ -89,6 +102,11 @@ class Tracker {
   /// until one verifies; tracking, keyframes and loop edges then continue in the map's world
   /// frame. Call before the first frame; throws semap::Error otherwise.
   void resume(const TrackerState& state);
+  /// Relocalises `other` (a keyframe of another saved map: its features, depth, grey image and
+  /// fern code) against this tracker's keyframes as a lost frame is (METHODS A3: the most
+  /// similar keyframes by ferns, wide-baseline A2 registration, the relocalisation overlap).
+  /// Changes nothing. Thread-safe against track() on another thread.
+  std::optional<KeyframeMatch> match_keyframe(const Keyframe& other) const;
   const TrackingConfig& config() const;
 
  private:

@@ -117,4 +117,27 @@ TrackerState decode_tracker_state(std::string_view bytes, const std::filesystem:
   return state;
 }
 
+TrackerState append_tracker_state(TrackerState a, const TrackerState& b, const Pose& T_a_b,
+                                  const std::vector<PoseGraphEdge>& links) {
+  const int shift = static_cast<int>(a.keyframes.size());
+  for (size_t i = 0; i < b.keyframes.size(); ++i) {
+    auto kf = std::make_shared<Keyframe>(*b.keyframes[i]);  // images and features are shared, not copied
+    kf->id += shift;
+    if (kf->parent >= 0) kf->parent += shift;
+    a.keyframes.push_back(std::move(kf));
+    a.T_world_keyframe.push_back(orthonormalized(T_a_b * b.T_world_keyframe[i]));
+  }
+  for (PoseGraphEdge e : b.edges) {
+    e.from += shift;
+    e.to += shift;
+    a.edges.push_back(e);
+  }
+  for (PoseGraphEdge e : links) {
+    e.to += shift;
+    e.is_loop = true;
+    a.edges.push_back(e);
+  }
+  return a;
+}
+
 }  // namespace semap

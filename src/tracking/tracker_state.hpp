@@ -45,4 +45,11 @@ std::string encode_tracker_state(const TrackerState& state);
 /// Throws semap::Error naming `path` for a corrupt or inconsistent section.
 TrackerState decode_tracker_state(std::string_view bytes, const std::filesystem::path& path);
 
+/// Map merging (issue 19): `b`'s keyframes and edges after `a`'s, in a's world frame. b's ids
+/// (and parents, edge ends) are shifted by a's keyframe count and its poses become
+/// T_a_b * T_b_keyframe; `links` join the two graphs (from: a's keyframe id, to: b's id before
+/// the shift) as loop edges.
+TrackerState append_tracker_state(TrackerState a, const TrackerState& b, const Pose& T_a_b,
+                                  const std::vector<PoseGraphEdge>& links);
+
 }  // namespace semap

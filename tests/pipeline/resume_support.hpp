@@ -15,10 +15,12 @@ inline std::string file_bytes(const std::filesystem::path& path) {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-/// `semap run DATASET --out OUT [--resume RESUME]` with 2 threads, no progress lines.
+/// `semap run DATASET --out OUT [--resume RESUME] [--segmenter SEGMENTER]` with 2 threads, no
+/// progress lines.
 inline RunResult map_recording(const std::filesystem::path& dataset, const std::filesystem::path& out,
-                               const std::filesystem::path& resume = {}) {
+                               const std::filesystem::path& resume = {}, const std::string& segmenter = "") {
   RunOptions options;
+  options.segmenter = segmenter;
   options.dataset = dataset;
   options.out_dir = out;
   options.resume_from = resume;

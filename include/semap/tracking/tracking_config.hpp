@@ -99,6 +99,11 @@ struct TrackingConfig {
   int relocalisation_candidates = 3;   ///< keyframes (by fern similarity) tried when lost
   int relocalisation_recent = 2;       ///< plus this many most recent keyframes
   double relocalisation_min_overlap = 0.4;  ///< ICP overlap a relocalisation needs (no prior to check it against)
+  // Map merging (issue 19): the other map's keyframes are relocalised into this one; the
+  // alignments they imply must agree (two maps' drift differs, so not exactly).
+  double merge_agreement_m = 0.10;    ///< alignments within this translation support each other, metres
+  double merge_agreement_deg = 5.0;   ///< ... and within this rotation, degrees
+  int merge_min_agreeing = 2;         ///< relocalised keyframes that must agree (1 when the other map has one)
 
   // --- keyframes ---
   double keyframe_translation = 0.12;  ///< motion from the reference keyframe that makes a new one, metres
@@ -162,6 +167,9 @@ struct TrackingConfig {
     v.param("relocalisation_candidates", relocalisation_candidates, "", "keyframes (by fern similarity) tried when relocalising", {0, 1000});
     v.param("relocalisation_recent", relocalisation_recent, "", "most recent keyframes also tried when relocalising", {0, 1000});
     v.param("relocalisation_min_overlap", relocalisation_min_overlap, "", "ICP overlap a relocalisation needs", fraction());
+    v.param("merge_agreement_m", merge_agreement_m, "m", "map merging: relocalised keyframes whose alignments of the two maps agree within this support each other", positive(10.0));
+    v.param("merge_agreement_deg", merge_agreement_deg, "deg", "map merging: same for rotation", positive(180.0));
+    v.param("merge_min_agreeing", merge_min_agreeing, "keyframes", "map merging: agreeing relocalised keyframes needed to merge (1 when the other map has one keyframe)", {1, 100000});
     v.param("keyframe_translation", keyframe_translation, "m", "translation that makes a new keyframe", positive(100.0));
     v.param("keyframe_rotation_deg", keyframe_rotation_deg, "deg", "rotation that makes a new keyframe", positive(180.0));
     v.param("keyframe_min_overlap", keyframe_min_overlap, "", "ICP overlap below this makes a new keyframe", fraction());
