@@ -3,24 +3,11 @@
 #include <cstdio>
 
 #include "apps/semap/commands.hpp"
-#include "core/paths.hpp"
 #include "io/output_folder.hpp"
 #include "pipeline/report.hpp"
 #include "semap/pipeline/map_merge.hpp"
 
 namespace semap::app {
-
-namespace {
-
-/// The output folder must not be one of the inputs: publishing there would replace its files.
-void require_separate(const std::filesystem::path& input, const std::filesystem::path& out) {
-  const std::filesystem::path folder = std::filesystem::is_directory(input) ? input : input.parent_path();
-  std::error_code ec;
-  if (std::filesystem::equivalent(folder, out, ec))
-    throw Error(out, "is the folder of the input map " + input.string() + ": write the merged map elsewhere (inputs are only read)");
-}
-
-}  // namespace
 
 void add_merge_command(CLI::App& app, CommandRunner& run) {
   auto* cmd = app.add_subcommand(
@@ -35,20 +22,9 @@ void add_merge_command(CLI::App& app, CommandRunner& run) {
   cmd->callback([&run, args] {
     run = [args]() -> int {
       const InterruptGuard interrupts;
-      for (const std::string& input : {args->a, args->b})
-        if (!std::filesystem::exists(input)) throw Error(input, "not found");
-      if (std::filesystem::exists(args->out)) {
-        require_separate(args->a, args->out);
-        require_separate(args->b, args->out);
-      }
-      OutputFolder out(args->out, {.tool = "merge", .publish_last = {"report.json"}});
-      const MapMergeResult result = merge_maps(args->a, args->b, out.staging());
+      const MapMergeResult result = merge_maps(args->a, args->b, args->out);
       if (!result.merged) throw Error(args->b, result.reason + "; nothing written");
-      const nlohmann::json report = to_json(result);
-      write_file_atomic(out.staging() / "report.json", report.dump(2) + "\n");
-      throw_if_interrupted();
-      out.publish();
-      std::fputs(summary_table(report).c_str(), stdout);
+      std::fputs(summary_table(to_json(result)).c_str(), stdout);
       std::printf("merged map in %s\n", args->out.c_str());
       return 0;
     };

@@ -29,13 +29,15 @@ from ._semap import (  # noqa: F401  (the public API)
     default_config,
     evaluate_ate,
     evaluate_rpe,
+    merge_maps,
     open_dataset,
+    run,
 )
 
 __all__ = [
     "Camera", "Dataset", "DatasetFrame", "Error", "FrameResult", "Mapper", "Mesh", "Object",
-    "class_colors", "class_names", "default_config", "evaluate_ate", "evaluate_rpe", "open_dataset",
-    "to_open3d",
+    "class_colors", "class_names", "default_config", "evaluate_ate", "evaluate_rpe", "merge_maps",
+    "open_dataset", "run", "to_open3d",
 ]
 
 _COLOR_MODES = ("rgb", "class", "instance")

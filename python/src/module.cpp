@@ -4,13 +4,17 @@
 #include <pybind11/stl/filesystem.h>
 
 #include <filesystem>
+#include <optional>
 
 #include "bindings.hpp"
 #include "semap/core/error.hpp"
 #include "semap/core/labels.hpp"
 #include "semap/eval/trajectory_metrics.hpp"
 #include "semap/io/trajectory_io.hpp"
+#include "semap/pipeline/map_merge.hpp"
+#include "semap/pipeline/run_pipeline.hpp"
 #include "semap/pipeline/semap_config.hpp"
+#include "config.hpp"
 
 namespace py = pybind11;
 
@@ -33,6 +37,35 @@ py::dict evaluate_rpe(const std::filesystem::path& gt, const std::filesystem::pa
   {
     py::gil_scoped_release nogil;
     j = to_json(compute_rpe(read_tum_trajectory(gt), read_tum_trajectory(est), delta_s, max_dt));
+  }
+  return json_to_python(j);
+}
+
+/// `semap run` from Python: the same driver, outputs published into `out` as a whole.
+py::dict run(const std::filesystem::path& dataset, const std::filesystem::path& out, const py::object& config,
+             const std::string& segmenter, const std::optional<std::filesystem::path>& resume, bool evaluate,
+             bool progress) {
+  RunOptions options;
+  options.dataset = dataset;
+  options.out_dir = out;
+  options.segmenter = segmenter;
+  if (resume) options.resume_from = *resume;
+  options.evaluate = evaluate;
+  options.show_progress = progress;
+  const SemapConfig parsed = config_from_python(config);
+  nlohmann::json j;
+  {
+    py::gil_scoped_release nogil;
+    j = to_json(run_pipeline(options, parsed));
+  }
+  return json_to_python(j);
+}
+
+py::dict merge_maps(const std::filesystem::path& a, const std::filesystem::path& b, const std::filesystem::path& out) {
+  nlohmann::json j;
+  {
+    py::gil_scoped_release nogil;
+    j = to_json(semap::merge_maps(a, b, out));
   }
   return json_to_python(j);
 }
@@ -70,6 +103,15 @@ PYBIND11_MODULE(_semap, m) {
         "T_gt_est");
   m.def("evaluate_rpe", &evaluate_rpe, py::arg("gt_path"), py::arg("est_path"), py::arg("delta_s") = 1.0,
         py::arg("max_dt") = 0.02, "RPE over delta_s seconds: trans_rmse_m_per_s, rot_rmse_deg_per_s, ...");
+  m.def("run", &run, py::arg("dataset"), py::arg("out"), py::arg("config") = py::none(), py::arg("segmenter") = "",
+        py::arg("resume") = py::none(), py::arg("evaluate") = true, py::arg("progress") = false,
+        "`semap run DATASET --out OUT`: maps a dataset folder/file, publishes the outputs into out as a whole "
+        "(trajectory, mesh, objects, map.semap, report) and returns report.json as a dict. config: None, a nested "
+        "dict or a YAML path; segmenter: '' (the config's), 'none', 'yolo:MODEL', ...; resume: a saved map to "
+        "continue");
+  m.def("merge_maps", &merge_maps, py::arg("a"), py::arg("b"), py::arg("out"),
+        "`semap merge A B --out OUT`: map B relocalised into map A and fused in A's world frame; returns the "
+        "report (summary.merged false and summary.reason when B does not relocalise: nothing written)");
   m.def("class_names", &class_names, "the project's classes; index = class id");
   m.def("class_colors", &class_colors, "(C, 3) uint8 palette; row = class id");
   m.def("default_config", &semap::dump_default_config, "YAML of every parameter with its default");

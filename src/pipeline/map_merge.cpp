@@ -4,6 +4,8 @@
 #include <set>
 
 #include "core/archive.hpp"
+#include "core/paths.hpp"
+#include "io/output_folder.hpp"
 #include "objects/object_mapper.hpp"
 #include "pipeline/map_archive.hpp"
 #include "semap/core/error.hpp"
@@ -162,19 +164,28 @@ MapMergeResult merge_map_files(const fs::path& a, const fs::path& b, const fs::p
 }
 
 MapMergeResult merge_maps(const fs::path& a, const fs::path& b, const fs::path& out_dir) {
-  std::error_code ec;
-  fs::create_directories(out_dir, ec);
-  if (ec) throw Error(out_dir, "cannot create output folder: " + ec.message());
+  for (const fs::path& input : {a, b}) {
+    if (!fs::exists(input)) throw Error(input, "not found");
+    std::error_code ec;
+    if (fs::equivalent(folder_of(input), out_dir, ec))
+      throw Error(out_dir, "is the folder of the input map " + input.string() +
+                               ": write the merged map elsewhere (inputs are only read)");
+  }
+  OutputFolder out(out_dir, {.tool = "merge", .publish_last = {"report.json"}});
+  const fs::path dir = out.staging();
   SemapConfig config;
-  MapMergeResult r = merge_files(map_of(a), map_of(b), out_dir / "map.semap", config);
-  if (!r.merged) return r;
+  MapMergeResult r = merge_files(map_of(a), map_of(b), dir / "map.semap", config);
+  if (!r.merged) return r;  // out's destructor removes the staging folder: nothing written
   // The merged map as a Mapper gives the mesh and objects exactly as `semap run` writes them;
   // no segmenter is needed to read it.
   config.segmentation.segmenter = "none";
-  const auto mapper = Mapper::load(out_dir / "map.semap", config);
-  write_ply(out_dir / "mesh.ply", mapper->mesh());
-  write_objects(mapper->objects(), out_dir);
-  r.trajectories = write_trajectories(a, b, r.T_a_b, out_dir);
+  const auto mapper = Mapper::load(dir / "map.semap", config);
+  write_ply(dir / "mesh.ply", mapper->mesh());
+  write_objects(mapper->objects(), dir);
+  r.trajectories = write_trajectories(a, b, r.T_a_b, dir);
+  write_file_atomic(dir / "report.json", to_json(r).dump(2) + "\n");
+  throw_if_interrupted();
+  out.publish();
   return r;
 }
 

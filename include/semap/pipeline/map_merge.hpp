@@ -50,11 +50,13 @@ MapMergeResult merge_map_files(const std::filesystem::path& a, const std::filesy
                                const std::filesystem::path& out_map);
 
 /// merge_map_files on two output folders (of `semap run`, or of an earlier merge; a map.semap
-/// file is taken as its folder) writing into `out_dir` (created): map.semap, mesh.ply,
-/// objects.json + objects/<id>.ply, and every recording's trajectory in A's world frame as
-/// <recording>.trajectory.txt (a run folder's trajectory.txt is named after the folder; a
-/// merged folder's <recording>.trajectory.txt files are carried on, B's moved by T_a_b).
-/// Writes nothing when not merged. The caller publishes `out_dir` (io/output_folder.hpp).
+/// file is taken as its folder), published into `out_dir` as a whole when merged (staging
+/// folder, io/output_folder.hpp; nothing is written otherwise): map.semap, mesh.ply,
+/// objects.json + objects/<id>.ply, report.json, and every recording's trajectory in A's world
+/// frame as <recording>.trajectory.txt (a run folder's trajectory.txt is named after the
+/// folder; a merged folder's <recording>.trajectory.txt files are carried on, B's moved by
+/// T_a_b; a repeated name gets _2). Throws semap::Error for a missing input or `out_dir` being
+/// an input's folder, and as merge_map_files.
 MapMergeResult merge_maps(const std::filesystem::path& a, const std::filesystem::path& b,
                           const std::filesystem::path& out_dir);
 
