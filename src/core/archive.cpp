@@ -1,5 +1,9 @@
 #include "core/archive.hpp"
 
+#include <libdeflate.h>
+
+#include <memory>
+
 #include "core/paths.hpp"
 
 namespace semap {
@@ -17,6 +21,37 @@ uint64_t fnv1a(std::string_view data) {
   return h;
 }
 
+constexpr uint32_t kUncompressedVersion = 2;  // still read
+/// libdeflate level: 4 compresses keyframe images about as well as 9 at several times the speed.
+constexpr int kCompressionLevel = 4;
+/// DEFLATE cannot expand more than ~1032:1: a larger declared size is a corrupt (or hostile) file.
+constexpr uint64_t kMaxDeflateRatio = 1032;
+
+std::string compress(std::string_view raw) {
+  std::unique_ptr<libdeflate_compressor, decltype(&libdeflate_free_compressor)> c(
+      libdeflate_alloc_compressor(kCompressionLevel), &libdeflate_free_compressor);
+  if (!c) throw Error("map file", "out of memory for the compressor");
+  std::string out(libdeflate_deflate_compress_bound(c.get(), raw.size()), '\0');
+  const size_t n = libdeflate_deflate_compress(c.get(), raw.data(), raw.size(), out.data(), out.size());
+  if (n == 0 && !raw.empty()) throw Error("map file", "compression failed");
+  out.resize(n);
+  return out;
+}
+
+std::string decompress(std::string_view stored, uint64_t raw_bytes, const ByteReader& r) {
+  if (raw_bytes > kMaxDeflateRatio * stored.size() + 64 || raw_bytes > kMaxArchiveBytes)
+    r.fail("a section declares " + std::to_string(raw_bytes) + " bytes from " + std::to_string(stored.size()));
+  std::unique_ptr<libdeflate_decompressor, decltype(&libdeflate_free_decompressor)> d(
+      libdeflate_alloc_decompressor(), &libdeflate_free_decompressor);
+  std::string raw(raw_bytes, '\0');
+  size_t got = 0;
+  if (!d || libdeflate_deflate_decompress(d.get(), stored.data(), stored.size(), raw.data(), raw.size(), &got) !=
+                LIBDEFLATE_SUCCESS ||
+      got != raw_bytes)
+    r.fail("a section does not decompress");
+  return raw;
+}
+
 }  // namespace
 
 void write_map_archive(const std::filesystem::path& path, const ArchiveSections& sections) {
@@ -29,10 +64,12 @@ void write_map_archive(const std::filesystem::path& path, const ArchiveSections&
   const size_t checked_from = w.bytes().size();
   w.put(static_cast<uint32_t>(sections.size()));
   for (const auto& [name, payload] : sections) {
+    const std::string stored = compress(payload);
     w.put(static_cast<uint32_t>(name.size()));
     w.put_bytes(name.data(), name.size());
     w.put(static_cast<uint64_t>(payload.size()));
-    w.put_bytes(payload.data(), payload.size());
+    w.put(static_cast<uint64_t>(stored.size()));
+    w.put_bytes(stored.data(), stored.size());
   }
   w.put(fnv1a(std::string_view(w.bytes()).substr(checked_from)));
   write_file_atomic(path, w.bytes());
@@ -44,9 +81,9 @@ ArchiveSections read_map_archive(const std::filesystem::path& path) {
     throw Error(path, "not a semap map file (bad magic or truncated)");
   uint32_t version;
   std::memcpy(&version, bytes.data() + 8, 4);
-  if (version != kMapArchiveVersion)
-    throw Error(path, "map format version " + std::to_string(version) + ", this build reads version " +
-                          std::to_string(kMapArchiveVersion) +
+  if (version != kMapArchiveVersion && version != kUncompressedVersion)
+    throw Error(path, "map format version " + std::to_string(version) + ", this build reads versions " +
+                          std::to_string(kUncompressedVersion) + "-" + std::to_string(kMapArchiveVersion) +
                           (version < kMapArchiveVersion ? " (an older semap wrote it: map the recording again)" : ""));
   const size_t checked_from = 12;
   if (bytes.size() < checked_from + 4 + 8) throw Error(path, "truncated map file");
@@ -62,9 +99,16 @@ ArchiveSections read_map_archive(const std::filesystem::path& path) {
     if (name_bytes == 0 || name_bytes > 64) r.fail("bad section name length " + std::to_string(name_bytes));
     std::string name(name_bytes, '\0');
     r.read(name.data(), name_bytes);
-    const size_t payload_bytes = r.get_count(1);
-    std::string payload(payload_bytes, '\0');
-    r.read(payload.data(), payload_bytes);
+    std::string payload;
+    if (version == kUncompressedVersion) {
+      payload.resize(r.get_count(1));
+      r.read(payload.data(), payload.size());
+    } else {
+      const uint64_t raw_bytes = r.get<uint64_t>();
+      std::string stored(r.get_count(1), '\0');
+      r.read(stored.data(), stored.size());
+      payload = decompress(stored, raw_bytes, r);
+    }
     if (!sections.emplace(std::move(name), std::move(payload)).second) r.fail("a section appears twice");
   }
   r.expect_end();

@@ -2,8 +2,11 @@
 // map.semap container (issue 19): a versioned, checksummed file of named sections, one per
 // stage (tsdf, tracking, objects, camera, config), each encoded by its own stage.
 //   "SEMAPMAP" | u32 version | u32 section count | per section: u32 name bytes, name,
-//   u64 payload bytes, payload | u64 FNV-1a of everything after the version
-// Sections are written in name order, so equal contents give byte-identical files. Little-endian
+//   u64 payload bytes, u64 stored bytes, the payload DEFLATE-compressed (libdeflate) |
+//   u64 FNV-1a of everything after the version
+// Version 2 stored the payloads uncompressed (no stored-bytes field); it is still read.
+// Sections are written in name order, and compression is deterministic, so equal contents give
+// byte-identical files. Little-endian
 // PODs throughout (ByteWriter / ByteReader). Every read error names the file.
 #include <cstdint>
 #include <cstring>
@@ -19,8 +22,9 @@
 
 namespace semap {
 
-/// Version 1 held the TSDF only; version 2 is the sectioned map.
-inline constexpr uint32_t kMapArchiveVersion = 2;
+/// Version 1 held the TSDF only; version 2 is the sectioned map; version 3 compresses its
+/// sections (keyframe images and voxels shrink 3-4x).
+inline constexpr uint32_t kMapArchiveVersion = 3;
 
 using ArchiveSections = std::map<std::string, std::string>;
 

@@ -6,6 +6,7 @@
 
 #include <cstdio>
 
+#include "core/archive.hpp"
 #include "core/progress.hpp"
 #include "semap/core/error.hpp"
 #include "semap/eval/trajectory_metrics.hpp"
@@ -63,6 +64,25 @@ TEST(MapArchive, SaveLoadSaveIsByteIdenticalAndOldOrForeignFilesAreErrorsNamingT
   EXPECT_NE(error_of(tmp / "foreign.semap").find("not a semap map file"), std::string::npos);
   { std::ofstream(tmp / "cut.semap", std::ios::binary) << a.substr(0, a.size() / 2); }
   EXPECT_NE(error_of(tmp / "cut.semap").find("cut.semap"), std::string::npos);
+
+  // Version 2 (uncompressed sections, the previous release) is still read: the same map.
+  const ArchiveSections sections = read_map_archive(tmp / "a.semap");
+  ByteWriter v2;
+  v2.put_bytes("SEMAPMAP", 8);
+  v2.put(uint32_t{2});
+  v2.put(static_cast<uint32_t>(sections.size()));
+  for (const auto& [name, payload] : sections) {
+    v2.put(static_cast<uint32_t>(name.size()));
+    v2.put_bytes(name.data(), name.size());
+    v2.put_string(payload);
+  }
+  uint64_t sum = 1469598103934665603ULL;  // FNV-1a of everything after the version
+  for (const char c : std::string_view(v2.bytes()).substr(12)) sum = (sum ^ static_cast<uint8_t>(c)) * 1099511628211ULL;
+  v2.put(sum);
+  { std::ofstream(tmp / "v2.semap", std::ios::binary) << v2.bytes(); }
+  EXPECT_LT(a.size() * 3, v2.bytes().size()) << "version 3 compresses the sections";
+  Mapper::load(tmp / "v2.semap")->save(tmp / "v2_again.semap");
+  EXPECT_TRUE(file_bytes(tmp / "v2_again.semap") == a) << "a version 2 file loads as the same map";
 }
 
 // A recording of another place never relocalises into the saved map: it is mapped on its own,
