@@ -7,6 +7,7 @@
 
 #include "semap/eval/trajectory_metrics.hpp"
 #include "semap/pipeline/run_pipeline.hpp"
+#include "synth/synth_config.hpp"
 
 namespace semap::test {
 
@@ -28,6 +29,21 @@ inline RunResult map_recording(const std::filesystem::path& dataset, const std::
   SemapConfig config;
   config.pipeline.threads = 2;
   return run_pipeline(options, config);
+}
+
+/// Two synthetic rooms of 30 frames at 320x240 in `dir`/room1 and `dir`/room2: the second of
+/// another size, layout and textures (a place the first map never saw).
+inline void write_two_rooms(const std::filesystem::path& dir) {
+  SynthConfig synth;
+  synth.frames = 30;
+  synth.width = 320;
+  synth.height = 240;
+  synth.seed = 1;
+  generate_dataset(synth, dir / "room1");
+  synth.seed = 7;
+  synth.room_x = 8.0;
+  synth.room_y = 4.0;
+  generate_dataset(synth, dir / "room2");
 }
 
 }  // namespace semap::test

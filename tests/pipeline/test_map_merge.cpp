@@ -90,16 +90,7 @@ TEST(MapMerge, OverlappingRecordingsMappedApartMergeIntoOneWorldFrame) {
 TEST(MapMerge, MapsOfDifferentRoomsAreNotMergedAndNothingIsWritten) {
   Progress::set_mode(-1);
   test::TempDir tmp("semap_merge_apart");
-  SynthConfig synth;
-  synth.frames = 30;
-  synth.width = 320;
-  synth.height = 240;
-  synth.seed = 1;
-  generate_dataset(synth, tmp / "room1");
-  synth.seed = 7;
-  synth.room_x = 8.0;  // another room: other size, layout and textures
-  synth.room_y = 4.0;
-  generate_dataset(synth, tmp / "room2");
+  test::write_two_rooms(tmp.path());
   map_recording(tmp / "room1", tmp / "out1");
   map_recording(tmp / "room2", tmp / "out2");
   const MapMergeResult r = merge_maps(tmp / "out1", tmp / "out2", tmp / "merged");
@@ -109,17 +100,16 @@ TEST(MapMerge, MapsOfDifferentRoomsAreNotMergedAndNothingIsWritten) {
   std::printf("[merge] two rooms: %s\n", r.reason.c_str());
 
   // The CLI: one line naming the map, exit 1, no output folder content; inputs as outputs refused.
-  const auto cli = test::run_command(test::shell_quote(test::semap_executable().string()) + " merge " +
-                                     test::shell_quote((tmp / "out1").string()) + " " +
-                                     test::shell_quote((tmp / "out2").string()) + " --out " +
-                                     test::shell_quote((tmp / "cli").string()) + " 2>&1");
+  auto semap_merge = [&](const fs::path& out) {
+    return test::run_command(test::shell_quote(test::semap_executable().string()) + " merge " +
+                             test::shell_quote((tmp / "out1").string()) + " " + test::shell_quote((tmp / "out2").string()) +
+                             " --out " + test::shell_quote(out.string()) + " 2>&1");
+  };
+  const auto cli = semap_merge(tmp / "cli");
   EXPECT_EQ(cli.exit_code, 1) << cli.output;
   EXPECT_NE(cli.output.find("does not relocalise"), std::string::npos) << cli.output;
   EXPECT_FALSE(fs::exists(tmp / "cli" / "map.semap"));
-  const auto same = test::run_command(test::shell_quote(test::semap_executable().string()) + " merge " +
-                                      test::shell_quote((tmp / "out1").string()) + " " +
-                                      test::shell_quote((tmp / "out2").string()) + " --out " +
-                                      test::shell_quote((tmp / "out1").string()) + " 2>&1");
+  const auto same = semap_merge(tmp / "out1");
   EXPECT_EQ(same.exit_code, 1) << same.output;
   EXPECT_NE(same.output.find("input map"), std::string::npos) << same.output;
 }

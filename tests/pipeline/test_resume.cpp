@@ -90,16 +90,7 @@ TEST(MapArchive, SaveLoadSaveIsByteIdenticalAndOldOrForeignFilesAreErrorsNamingT
 TEST(Resume, ARecordingOfAnotherPlaceIsMappedOnItsOwnNotMerged) {
   Progress::set_mode(-1);
   test::TempDir tmp("semap_resume_apart");
-  SynthConfig synth;
-  synth.frames = 30;
-  synth.width = 320;
-  synth.height = 240;
-  synth.seed = 1;
-  generate_dataset(synth, tmp / "room1");
-  synth.seed = 7;
-  synth.room_x = 8.0;  // another room: other size, layout and textures
-  synth.room_y = 4.0;
-  generate_dataset(synth, tmp / "room2");
+  test::write_two_rooms(tmp.path());
   map_recording(tmp / "room1", tmp / "out1");
   const RunResult r2 = map_recording(tmp / "room2", tmp / "out2", tmp / "out1");
   EXPECT_TRUE(r2.not_merged);
