@@ -109,6 +109,9 @@ class ObjectMap {
   /// across recordings: the common frame's overlap stands in for it.
   ObjectMapMergeCounts merge_map(const ObjectMap& other, const Eigen::Isometry3f& T_this_other);
 
+  /// Key of the map voxel (map_voxel_size) holding `p`: an instance has one point per key.
+  uint64_t voxel_key(const Eigen::Vector3f& p) const;
+
   /// Frame of the points of a map saved by an earlier run: no pose correction moves them.
   static constexpr uint32_t kSavedMapFrame = 0xFFFFFFFFu;
   /// The instances as a map.semap section (issue 19; src/objects/object_map_io.cpp).
@@ -118,7 +121,6 @@ class ObjectMap {
   void decode_state(std::string_view bytes, const std::filesystem::path& path);
 
  private:
-  uint64_t voxel_key(const Eigen::Vector3f& p) const;
   /// One point per map voxel of the segment (the first), with its colour.
   void downsample(const ObjectSegment& segment, std::vector<Eigen::Vector3f>& points, std::vector<Rgb8>& colours) const;
   /// `frames`: per point, or one entry for all of them.

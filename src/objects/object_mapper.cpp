@@ -1,5 +1,7 @@
 #include "objects/object_mapper.hpp"
 
+#include <unordered_set>
+
 #include <Eigen/Eigenvalues>
 #include <chrono>
 #include <tuple>
@@ -149,7 +151,28 @@ std::vector<Eigen::Vector3f> largest_cluster(const std::vector<Eigen::Vector3f>&
   return out;
 }
 
-std::vector<ObjectSummary> ObjectMapper::summaries() const {
+namespace {
+
+/// The instance's exported points: projected onto the surface when asked, one per map voxel.
+void exported_points(const ObjectMap& map, const ObjectInstance& inst, const ObjectMapper::SurfaceProjection& onto_surface,
+                     ObjectSummary& o) {
+  if (!onto_surface) {
+    o.points = inst.points;
+    o.colours = inst.colours;
+    return;
+  }
+  const std::vector<Eigen::Vector3f> moved = onto_surface(inst.points);
+  std::unordered_set<uint64_t> seen;
+  for (size_t i = 0; i < moved.size(); ++i)
+    if (seen.insert(map.voxel_key(moved[i])).second) {
+      o.points.push_back(moved[i]);
+      o.colours.push_back(inst.colours[i]);
+    }
+}
+
+}  // namespace
+
+std::vector<ObjectSummary> ObjectMapper::summaries(const SurfaceProjection& onto_surface) const {
   std::vector<ObjectSummary> out;
   for (const auto& inst : map_.instances()) {
     if (inst.points.empty()) continue;
@@ -162,8 +185,9 @@ std::vector<ObjectSummary> ObjectMapper::summaries() const {
     for (size_t k = 0; k < shares.size(); ++k)
       if (shares[k] >= 0.005) o.class_distribution[std::string(class_name(static_cast<ClassId>(k)))] = shares[k];
     o.confidence = 1.0 - inst.mean_scores()[0];
+    exported_points(map_, inst, config_.points_on_surface ? onto_surface : SurfaceProjection{}, o);
     // Boxes describe the object's body: its largest cluster, trimmed of stray points.
-    const std::vector<Eigen::Vector3f> body = largest_cluster(inst.points, config_.box_cluster_distance);
+    const std::vector<Eigen::Vector3f> body = largest_cluster(o.points, config_.box_cluster_distance);
     std::vector<double> coordinate(body.size());
     for (int a = 0; a < 3; ++a) {
       for (size_t i = 0; i < body.size(); ++i) coordinate[i] = body[i][a];
@@ -172,9 +196,9 @@ std::vector<ObjectSummary> ObjectMapper::summaries() const {
       o.aabb_max[a] = static_cast<float>(h);
     }
     o.box = fit_oriented_box(body, config_.box_trim_fraction);
-    o.centroid = inst.centroid();
-    o.points = inst.points;
-    o.colours = inst.colours;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (const auto& p : o.points) sum += p.cast<double>();
+    o.centroid = (sum / static_cast<double>(o.points.size())).cast<float>();
     o.merge_count = inst.n;
     o.associations = inst.total_associations;
     o.first_frame = inst.first_frame;

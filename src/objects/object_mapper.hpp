@@ -3,6 +3,7 @@
 // are associated with the map; every T frames the map is optimised by association counts.
 #include <Eigen/Core>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <string>
 #include <nlohmann/json.hpp>
@@ -57,9 +58,12 @@ class ObjectMapper {
   /// Final C5 pass (config final_optimisation). Call once after the last frame.
   void finish();
   /// The objects.json document.
-  nlohmann::json to_json() const;
+  nlohmann::json to_json() const;  ///< of summaries() without surface projection
+  /// Moves points onto the fused surface (the Mapper passes the TSDF's projection): used for the
+  /// exported points when config points_on_surface.
+  using SurfaceProjection = std::function<std::vector<Eigen::Vector3f>(const std::vector<Eigen::Vector3f>&)>;
   /// Every non-empty instance, with its box and class distribution.
-  std::vector<ObjectSummary> summaries() const;
+  std::vector<ObjectSummary> summaries(const SurfaceProjection& onto_surface = {}) const;
 
   const std::vector<ObjectInstance>& instances() const { return map_.instances(); }
   const ObjectMap& map() const { return map_; }

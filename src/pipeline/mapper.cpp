@@ -23,6 +23,7 @@
 #include "tracking/tracker.hpp"
 #include "tracking/tracker_state.hpp"
 #include "tsdf/map_io.hpp"
+#include "tsdf/tsdf_interpolation.hpp"
 #include "tsdf/semantic_tsdf.hpp"
 
 namespace semap {
@@ -559,8 +560,13 @@ TriangleMesh Mapper::mesh() const {
 }
 
 std::vector<ObjectSummary> Mapper::objects() const {
+  // Exported points on the fused surface (objects.points_on_surface). Lock order: objects, then
+  // tsdf (no other path holds both).
   std::lock_guard lock(impl_->objects_mutex);
-  return impl_->objects.summaries();
+  return impl_->objects.summaries([this](const std::vector<Eigen::Vector3f>& points) {
+    std::lock_guard tsdf_lock(impl_->tsdf_mutex);
+    return project_onto_surface(impl_->tsdf.map(), points);
+  });
 }
 
 void Mapper::read_tsdf(const std::function<void(const TsdfMap&)>& reader) const {

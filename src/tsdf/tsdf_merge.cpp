@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "semap/core/error.hpp"
+#include "tsdf/tsdf_interpolation.hpp"
 
 namespace semap {
 namespace {
@@ -28,58 +29,15 @@ struct BlockSamples {
   std::vector<Sample> voxels;  ///< kBlockVoxels, or empty when no voxel got a measurement
 };
 
-/// Looks voxels up in the source map, remembering the last block (neighbouring lookups mostly
-/// hit the same block).
-class SourceLookup {
- public:
-  explicit SourceLookup(const TsdfMap& map) : map_(map) {}
-  const TsdfVoxel* observed(const VoxelIndex& v, const Block** block_out = nullptr, int* li_out = nullptr) {
-    const BlockIndex b = block_of_voxel(v);
-    if (!cached_ || b != index_) {
-      block_ = map_.find_block(b);
-      index_ = b;
-      cached_ = true;
-    }
-    if (!block_) return nullptr;
-    const int li = local_index(v);
-    const TsdfVoxel* voxel = &block_->voxels[li];
-    if (voxel->weight_q == 0) return nullptr;
-    if (block_out) *block_out = block_;
-    if (li_out) *li_out = li;
-    return voxel;
-  }
-
- private:
-  const TsdfMap& map_;
-  const Block* block_ = nullptr;
-  BlockIndex index_{0, 0, 0};
-  bool cached_ = false;
-};
-
 /// The source's measurement at `q` (source frame, metres): trilinear sdf where the 8 voxel
 /// centres around q are observed, else the nearest voxel's; the nearest voxel's weight.
-Sample sample_at(SourceLookup& lookup, const TsdfMap& source, const Eigen::Vector3f& q) {
+Sample sample_at(CachedVoxelLookup& lookup, const TsdfMap& source, const Eigen::Vector3f& q) {
   Sample s;
-  const VoxelIndex nearest = source.voxel_of_point(q);
-  s.nearest = lookup.observed(nearest, &s.nearest_block, &s.nearest_li);
+  s.nearest = lookup.observed(source.voxel_of_point(q), &s.nearest_block, &s.nearest_li);
   if (!s.nearest) return s;
   s.valid = true;
   s.weight = source.weights().decode(s.nearest->weight_q);
-  s.sdf = s.nearest->sdf();
-  const Eigen::Vector3f g = q / source.voxel_size() - Eigen::Vector3f::Constant(0.5f);  // in voxel-centre units
-  const Eigen::Vector3f base = g.array().floor();
-  const Eigen::Vector3f t = g - base;
-  const VoxelIndex b = base.cast<int>();
-  float sdf = 0.0f;
-  for (int corner = 0; corner < 8; ++corner) {
-    const VoxelIndex v = b + VoxelIndex(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
-    const TsdfVoxel* voxel = lookup.observed(v);
-    if (!voxel) return s;  // a neighbour unobserved: the nearest voxel's sdf
-    const float wx = (corner & 1) ? t.x() : 1 - t.x(), wy = (corner & 2) ? t.y() : 1 - t.y(),
-                wz = (corner & 4) ? t.z() : 1 - t.z();
-    sdf += wx * wy * wz * voxel->sdf();
-  }
-  s.sdf = sdf;
+  if (!interpolate_sdf(lookup, q, s.sdf)) s.sdf = s.nearest->sdf();  // a neighbour unobserved
   return s;
 }
 
@@ -108,7 +66,7 @@ std::vector<BlockIndex> reachable_blocks(const TsdfMap& target, const TsdfMap& s
 BlockSamples sample_block(const TsdfMap& target, const TsdfMap& source, const Eigen::Isometry3f& T_source_target,
                           const BlockIndex& index) {
   BlockSamples out{index, {}};
-  SourceLookup lookup(source);
+  CachedVoxelLookup lookup(source);
   std::vector<Sample> voxels(kBlockVoxels);
   bool any = false;
   const VoxelIndex first = index * kBlockSide;

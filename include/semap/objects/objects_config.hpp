@@ -90,6 +90,7 @@ struct ObjectsConfig {
   bool accumulate_between_keyframes = true;  ///< extension to C3: ObjectMapper::accumulate() adds the masks' points of non-keyframes to matching instances
   double box_cluster_distance = 0.05;  ///< exported boxes: points of the largest cluster with this linking distance (m, 0 = all points)
   double box_trim_fraction = 0.01;     ///< exported boxes: this fraction of the points is ignored at each end of every axis
+  bool points_on_surface = true;       ///< exported points (objects.json, objects/<id>.ply, boxes) projected onto the fused TSDF surface
 
   void visit(ParamVisitor& v) {
     const ParamRange<int> at_least_one{1};
@@ -145,6 +146,7 @@ struct ObjectsConfig {
     v.param("accumulate_between_keyframes", accumulate_between_keyframes, "", "extension to C3: segmented frames between object keyframes add their mask points to instances they overlap (never create, never count)");
     v.param("box_cluster_distance", box_cluster_distance, "m", "exported boxes enclose the largest cluster of the instance's points linked within this distance (0 = all points)", non_negative(1.0));
     v.param("box_trim_fraction", box_trim_fraction, "", "exported boxes ignore this fraction of the points at each end of every axis (stray depth-edge points)", {0.0, 0.49});
+    v.param("points_on_surface", points_on_surface, "", "exported object points (and their boxes) are moved onto the fused TSDF surface: one frame's back-projection carries its depth noise, the TSDF averages every frame (the map keeps the raw points for association)");
   }
   /// Ranges come from visit(); the rules between parameters are here.
   void validate() const {
