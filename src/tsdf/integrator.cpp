@@ -20,6 +20,7 @@
 #include <cstdlib>
 #include <utility>
 
+#include "core/cpu_time.hpp"
 #include "semap/core/error.hpp"
 
 namespace semap {
@@ -259,7 +260,8 @@ struct TouchedBlocks {
 // optional drop of far blocks (issue 8 memory bound) are the same; only run() differs.
 class ArenaIntegrator : public Integrator {
  public:
-  explicit ArenaIntegrator(const TsdfConfig& cfg) : arena_(arena_threads(cfg)) {}
+  explicit ArenaIntegrator(const TsdfConfig& cfg) : arena_(arena_threads(cfg)), worker_cpu_(arena_) {}
+  double worker_cpu_ms() const override { return worker_cpu_.total_ms(); }
 
   void integrate(TsdfMap& map, const IntegrationInput& in) override {
     const FrameSetup f = setup_frame(map, in);
@@ -273,6 +275,7 @@ class ArenaIntegrator : public Integrator {
 
  private:
   tbb::task_arena arena_;
+  ArenaWorkerCpu worker_cpu_;
 };
 
 /// The voxels one grouped ray crosses (structure of arrays) and their B6 signed distances
