@@ -163,17 +163,26 @@ inline Eigen::Vector3i floor_cells(const Eigen::Vector3f& p) {
 }
 
 /// Visits n cells from `cell`, each step along the axis of the smallest t_max (ties: as
-/// x < y ? (x < z ? x : z) : (y < z ? y : z)), picked by table: the choice is data-dependent, a
-/// branch on it mispredicts.
+/// x < y ? (x < z ? x : z) : (y < z ? y : z), i.e. x when x < y and x < z, else y when y < z,
+/// else z). The axis is chosen by selects on values kept in registers: a data-dependent branch
+/// mispredicts, and an indexed array update went through memory (store-forwarding latency on
+/// every step of the loop-carried chain).
 template <class Visit>
 inline void step_cells(std::array<int, 3> cell, const std::array<int, 3>& step, std::array<float, 3> t_max,
                        const std::array<float, 3>& t_delta, int n, Visit&& visit) {
-  static constexpr std::array<int8_t, 8> kAxis = {2, 2, 2, 0, 1, 2, 1, 0};  // [x<y | x<z << 1 | y<z << 2]
+  int cx = cell[0], cy = cell[1], cz = cell[2];
+  float tx = t_max[0], ty = t_max[1], tz = t_max[2];
   for (int i = 0; i < n; ++i) {
-    visit(Eigen::Vector3i(cell[0], cell[1], cell[2]));
-    const int axis = kAxis[(t_max[0] < t_max[1]) | (t_max[0] < t_max[2]) << 1 | (t_max[1] < t_max[2]) << 2];
-    cell[axis] += step[axis];
-    t_max[axis] += t_delta[axis];
+    visit(Eigen::Vector3i(cx, cy, cz));
+    const bool sx = (tx < ty) & (tx < tz);
+    const bool sy = !sx & (ty < tz);
+    const bool sz = !sx & !sy;
+    cx += sx ? step[0] : 0;
+    cy += sy ? step[1] : 0;
+    cz += sz ? step[2] : 0;
+    tx = sx ? tx + t_delta[0] : tx;
+    ty = sy ? ty + t_delta[1] : ty;
+    tz = sz ? tz + t_delta[2] : tz;
   }
 }
 
@@ -333,18 +342,14 @@ class GroupedIntegrator final : public ArenaIntegrator {
     Rgb8 colour;
     ClassDistribution observation;
   };
-  struct RayUpdate {
-    VoxelIndex voxel;
-    float d;
-    int32_t group;
-  };
   /// Consecutive updates of one chunk in one block.
   struct BlockRun {
     BlockIndex block;
     uint32_t count;
     int32_t slot;  ///< the block's index among the frame's touched blocks
   };
-  /// A RayUpdate bucketed by block: the voxel by its local index.
+  /// One voxel update of a ray, its voxel by the local index within its block (the block is
+  /// its run's).
   struct BlockUpdate {
     float d;
     int32_t group;
@@ -402,31 +407,24 @@ class GroupedIntegrator final : public ArenaIntegrator {
     groups_.clear();
     slots_.clear();
     uint64_t last_key = ~0ULL;
-    int32_t g = -1;
+    int32_t g = -1, s = -1;
+    ClassId last_label = 0;
+    const uint8_t* labels = f.labels ? in.labels.ptr<uint8_t>(0) : nullptr;
     for (size_t i = 0; i < n_pixels; ++i) {
       PixelPoint& pp = points_[i];
       if (pp.w == 0) continue;
       ++stats_.valid_pixels;
-      if (pp.key != last_key) {  // neighbouring pixels mostly fall into the same voxel
+      const ClassId label = labels ? labels[i] : 0;
+      const bool same_group = pp.key == last_key;
+      if (!same_group) {  // neighbouring pixels mostly fall into the same voxel
         g = find_or_add_group(pp.key);
         last_key = pp.key;
       }
       pp.group = g;
       Group& group = groups_[g];
       group.total_weight += pp.w;
-      const ClassId label = f.labels ? in.labels.ptr<uint8_t>(0)[i] : 0;
-      int32_t s = group.first_slot, last = -1;
-      while (s >= 0 && slots_[s].label != label) {
-        last = s;
-        s = slots_[s].next;
-      }
-      if (s < 0) {
-        s = static_cast<int32_t>(slots_.size());
-        slots_.emplace_back();
-        slots_.back().label = label;
-        if (last < 0) group.first_slot = s;
-        else slots_[last].next = s;
-      }
+      if (!same_group || label != last_label) s = find_or_add_slot(group, label);  // else: the previous pixel's
+      last_label = label;
       LabelSlot& slot = slots_[s];
       slot.weight += pp.w;
       slot.weighted_sum += pp.w * pp.p;
@@ -467,8 +465,12 @@ class GroupedIntegrator final : public ArenaIntegrator {
     chunk_runs_.resize(n_chunks);
     const float delta = f.delta;
     tbb::parallel_for(size_t{0}, n_chunks, [&](size_t c) {
-      std::vector<RayUpdate>& out = chunk_updates_[c];
+      // The chunk's updates, by local index, as runs of one block (step 5 touches each run,
+      // not each update, and copies the runs).
+      std::vector<BlockUpdate>& out = chunk_updates_[c];
+      std::vector<BlockRun>& runs = chunk_runs_[c];
       out.clear();
+      runs.clear();
       RayCells cells;
       const size_t end = std::min(groups_.size(), (c + 1) * kChunk);
       for (size_t g = c * kChunk; g < end; ++g) {
@@ -481,16 +483,14 @@ class GroupedIntegrator final : public ArenaIntegrator {
         cells.clear();
         traverse_cells(a / f.s, b / f.s, [&](const Eigen::Vector3i& vox) { cells.add(vox); });
         cells.distances(dist, f.s, f.t_wc);
-        for (size_t j = 0; j < cells.size(); ++j)
-          if (!(cells.d[j] <= -delta)) out.push_back(RayUpdate{cells.voxel(j), cells.d[j], static_cast<int32_t>(g)});
-      }
-      // The chunk's updates as runs of one block (step 5 touches each run, not each update).
-      std::vector<BlockRun>& runs = chunk_runs_[c];
-      runs.clear();
-      for (const RayUpdate& u : out) {
-        const BlockIndex b = block_of_voxel(u.voxel);
-        if (runs.empty() || runs.back().block != b) runs.push_back(BlockRun{b, 0, -1});
-        ++runs.back().count;
+        for (size_t j = 0; j < cells.size(); ++j) {
+          if (cells.d[j] <= -delta) continue;
+          const VoxelIndex voxel = cells.voxel(j);
+          const BlockIndex b = block_of_voxel(voxel);
+          if (runs.empty() || runs.back().block != b) runs.push_back(BlockRun{b, 0, -1});
+          ++runs.back().count;
+          out.push_back(BlockUpdate{cells.d[j], static_cast<int32_t>(g), static_cast<uint16_t>(local_index(voxel))});
+        }
       }
     });
     // 5. Bucket the updates by block, stable (each block's updates in ray order): the blocks
@@ -516,11 +516,12 @@ class GroupedIntegrator final : public ArenaIntegrator {
     }
     sorted_.resize(n_updates);
     tbb::parallel_for(size_t{0}, n_chunks, [&](size_t c) {
-      const RayUpdate* u = chunk_updates_[c].data();
+      const BlockUpdate* u = chunk_updates_[c].data();
       for (const BlockRun& run : chunk_runs_[c]) {
         size_t& cursor = chunk_cursors_[c][run.slot];
-        for (uint32_t j = 0; j < run.count; ++j, ++u)
-          sorted_[cursor++] = BlockUpdate{u->d, u->group, static_cast<uint16_t>(local_index(u->voxel))};
+        std::copy(u, u + run.count, sorted_.begin() + static_cast<std::ptrdiff_t>(cursor));
+        u += run.count;
+        cursor += run.count;
       }
     });
     // 6. Apply per block in parallel (each block's updates in ray order: deterministic).
@@ -544,6 +545,22 @@ class GroupedIntegrator final : public ArenaIntegrator {
     stats_.voxel_updates = n_updates;
     stats_.touched_blocks = n_blocks;
     stats_.allocated_blocks = touched.allocated;
+  }
+
+  /// The slot of `label` in `group`'s list, a new one appended when absent.
+  int32_t find_or_add_slot(Group& group, ClassId label) {
+    int32_t s = group.first_slot, last = -1;
+    while (s >= 0 && slots_[s].label != label) {
+      last = s;
+      s = slots_[s].next;
+    }
+    if (s >= 0) return s;
+    s = static_cast<int32_t>(slots_.size());
+    slots_.emplace_back();
+    slots_.back().label = label;
+    if (last < 0) group.first_slot = s;
+    else slots_[last].next = s;
+    return s;
   }
 
   /// The group of voxel key `key`, a new one (the next id) when absent (B5 grouping).
@@ -623,7 +640,7 @@ class GroupedIntegrator final : public ArenaIntegrator {
   std::vector<int32_t> table_;
   std::vector<Group> groups_;
   std::vector<LabelSlot> slots_;
-  std::vector<std::vector<RayUpdate>> chunk_updates_;
+  std::vector<std::vector<BlockUpdate>> chunk_updates_;
   std::vector<std::vector<BlockRun>> chunk_runs_;
   std::vector<std::vector<size_t>> chunk_cursors_;  ///< per chunk, per touched block
   std::vector<size_t> offsets_;
