@@ -332,11 +332,27 @@ class GroupedIntegrator final : public ArenaIntegrator {
     ClassId label = 0;
     int32_t next = -1;
   };
-  struct Group {
+  /// A LabelSlot's running sums, held in registers by the grouping loop.
+  struct SlotSums {
+    float weight = 0, x = 0, y = 0, z = 0, confidence = 0, r = 0, g = 0, b = 0;
+    void load(const LabelSlot& s) {
+      weight = s.weight, x = s.weighted_sum.x(), y = s.weighted_sum.y(), z = s.weighted_sum.z();
+      confidence = s.confidence_sum, r = s.rgb_sum[0], g = s.rgb_sum[1], b = s.rgb_sum[2];
+    }
+    void store(LabelSlot& s) const {
+      s.weight = weight, s.weighted_sum = Eigen::Vector3f(x, y, z), s.confidence_sum = confidence;
+      s.rgb_sum[0] = r, s.rgb_sum[1] = g, s.rgb_sum[2] = b;
+    }
+  };
+  /// What grouping reads and writes of a group, 16 bytes (it touches one per change of voxel;
+  /// with the rest of Group, 100 bytes, they were its cache misses).
+  struct GroupHead {
     uint64_t key;
     int32_t first_slot;
     float total_weight;
-    // Filled after grouping:
+  };
+  /// The rest, filled after grouping (same index).
+  struct Group {
     Eigen::Vector3f point;
     ClassId label;
     Rgb8 colour;
@@ -402,46 +418,62 @@ class GroupedIntegrator final : public ArenaIntegrator {
     // that size was a 4 MB fill and a cache miss per probe) and doubles at half load. Group ids
     // follow pixel order whatever the table size.
     size_t capacity = 1024;
-    while (capacity < 4 * groups_.size()) capacity *= 2;
+    while (capacity < 4 * heads_.size()) capacity *= 2;
     table_.assign(capacity, -1);
-    groups_.clear();
+    heads_.clear();
     slots_.clear();
+    // The current group's weight and label slot's sums are held in registers while consecutive
+    // pixels add to them (written back when the pixel's voxel or label changes): the same
+    // additions in the same order as into memory, without a store-forwarded load on each chain.
     uint64_t last_key = ~0ULL;
     int32_t g = -1, s = -1;
     ClassId last_label = 0;
+    float group_weight = 0;
+    SlotSums sums;
     const uint8_t* labels = f.labels ? in.labels.ptr<uint8_t>(0) : nullptr;
+    const float* confidence = f.confidence ? in.confidence.ptr<float>(0) : nullptr;
+    const uint8_t* colour = f.colour ? in.colour.ptr<uint8_t>(0) : nullptr;
     for (size_t i = 0; i < n_pixels; ++i) {
       PixelPoint& pp = points_[i];
       if (pp.w == 0) continue;
       ++stats_.valid_pixels;
       const ClassId label = labels ? labels[i] : 0;
-      const bool same_group = pp.key == last_key;
-      if (!same_group) {  // neighbouring pixels mostly fall into the same voxel
-        g = find_or_add_group(pp.key);
-        last_key = pp.key;
+      const bool same_group = pp.key == last_key;  // neighbouring pixels mostly fall into the same voxel
+      if (!same_group || label != last_label) {
+        if (s >= 0) sums.store(slots_[s]);
+        if (!same_group) {
+          if (g >= 0) heads_[g].total_weight = group_weight;
+          g = find_or_add_group(pp.key);
+          last_key = pp.key;
+          group_weight = heads_[g].total_weight;
+        }
+        s = find_or_add_slot(heads_[g], label);
+        sums.load(slots_[s]);
+        last_label = label;
       }
       pp.group = g;
-      Group& group = groups_[g];
-      group.total_weight += pp.w;
-      if (!same_group || label != last_label) s = find_or_add_slot(group, label);  // else: the previous pixel's
-      last_label = label;
-      LabelSlot& slot = slots_[s];
-      slot.weight += pp.w;
-      slot.weighted_sum += pp.w * pp.p;
-      if (f.confidence) slot.confidence_sum += pp.w * in.confidence.ptr<float>(0)[i];
-      if (f.colour) {
-        const uint8_t* bgr = in.colour.ptr<uint8_t>(0) + 3 * i;
-        slot.rgb_sum[0] += pp.w * bgr[2];
-        slot.rgb_sum[1] += pp.w * bgr[1];
-        slot.rgb_sum[2] += pp.w * bgr[0];
+      const float w = pp.w;
+      group_weight += w;
+      sums.weight += w;
+      sums.x += w * pp.p.x(), sums.y += w * pp.p.y(), sums.z += w * pp.p.z();
+      if (confidence) sums.confidence += w * confidence[i];
+      if (colour) {
+        const uint8_t* bgr = colour + 3 * i;
+        sums.r += w * bgr[2], sums.g += w * bgr[1], sums.b += w * bgr[0];
       }
     }
-    stats_.rays = groups_.size();
+    if (s >= 0) sums.store(slots_[s]);
+    if (g >= 0) heads_[g].total_weight = group_weight;
+    stats_.rays = heads_.size();
     // 3. Each group's label = argmax W_l, its point = weighted mean of the points with that label.
     const bool want_observation = map.has_bayes_layer() && f.labels;
-    for (Group& g : groups_) {
+    // Reused from the last frame: every field read later is written below (an observation only
+    // where it is read: labelled groups with the Bayes layer).
+    groups_.resize(heads_.size());
+    for (size_t k = 0; k < heads_.size(); ++k) {
+      Group& g = groups_[k];
       const LabelSlot* best = nullptr;
-      for (int32_t s = g.first_slot; s >= 0; s = slots_[s].next) {
+      for (int32_t s = heads_[k].first_slot; s >= 0; s = slots_[s].next) {
         const LabelSlot& slot = slots_[s];
         if (!best || slot.weight > best->weight || (slot.weight == best->weight && slot.label < best->label)) best = &slot;
       }
@@ -457,7 +489,7 @@ class GroupedIntegrator final : public ArenaIntegrator {
     }
     if (want_observation && f.probabilities) group_probabilities(in, f, map.bayes().k());
     ray_info_.resize(groups_.size());
-    for (size_t g = 0; g < groups_.size(); ++g) ray_info_[g] = RayInfo{groups_[g].total_weight, groups_[g].colour, groups_[g].label};
+    for (size_t g = 0; g < groups_.size(); ++g) ray_info_[g] = RayInfo{heads_[g].total_weight, groups_[g].colour, groups_[g].label};
     // 4. Cast one ray per group through the truncation band (parallel in fixed chunks).
     constexpr size_t kChunk = 512;
     const size_t n_chunks = (groups_.size() + kChunk - 1) / kChunk;
@@ -548,7 +580,7 @@ class GroupedIntegrator final : public ArenaIntegrator {
   }
 
   /// The slot of `label` in `group`'s list, a new one appended when absent.
-  int32_t find_or_add_slot(Group& group, ClassId label) {
+  int32_t find_or_add_slot(GroupHead& group, ClassId label) {
     int32_t s = group.first_slot, last = -1;
     while (s >= 0 && slots_[s].label != label) {
       last = s;
@@ -568,18 +600,18 @@ class GroupedIntegrator final : public ArenaIntegrator {
     size_t mask = table_.size() - 1;
     for (size_t h = mix_key(key) & mask;; h = (h + 1) & mask) {
       const int32_t g = table_[h];
-      if (g >= 0 && groups_[g].key == key) return g;
+      if (g >= 0 && heads_[g].key == key) return g;
       if (g >= 0) continue;
-      const int32_t added = static_cast<int32_t>(groups_.size());
-      groups_.push_back(Group{key, -1, 0.0f, Eigen::Vector3f::Zero(), 0, {}, {}});
-      if (2 * groups_.size() <= table_.size()) {
+      const int32_t added = static_cast<int32_t>(heads_.size());
+      heads_.push_back(GroupHead{key, -1, 0.0f});
+      if (2 * heads_.size() <= table_.size()) {
         table_[h] = added;
         return added;
       }
       table_.assign(2 * table_.size(), -1);  // grow: re-insert every group, the new one too
       mask = table_.size() - 1;
-      for (size_t k = 0; k < groups_.size(); ++k) {
-        size_t j = mix_key(groups_[k].key) & mask;
+      for (size_t k = 0; k < heads_.size(); ++k) {
+        size_t j = mix_key(heads_[k].key) & mask;
         while (table_[j] >= 0) j = (j + 1) & mask;
         table_[j] = static_cast<int32_t>(k);
       }
@@ -638,6 +670,7 @@ class GroupedIntegrator final : public ArenaIntegrator {
 
   std::vector<PixelPoint> points_;
   std::vector<int32_t> table_;
+  std::vector<GroupHead> heads_;
   std::vector<Group> groups_;
   std::vector<LabelSlot> slots_;
   std::vector<std::vector<BlockUpdate>> chunk_updates_;
