@@ -7,6 +7,10 @@
 //   build/bench/bench_tsdf [--frames 200] [--synthetic-frames 60] [--threads 2]
 //                          [--voxels 0.01,0.02,0.05] [--synthetic DIR]
 //                          [--variants ours_projective_core,...]  (a subset of ours; Open3D always runs)
+//                          [--memory 1]  (0: no peak-RSS child processes)
+// Memory (TUM): bytes_per_allocated_voxel for every system, and peak_rss_mb_own_process for the
+// default configuration and both Open3D systems, each re-run alone (--memory-child NAME: this
+// program re-executed, frames streamed one at a time, peak taken before mesh extraction).
 // Each variant's JSON carries map_checksum (FNV-1a over every layer of the sorted blocks): a
 // speed-up that keeps the map bit-identical keeps the checksum.
 #include <algorithm>
@@ -21,6 +25,7 @@
 #include <unordered_map>
 #include <map>
 #include <cstring>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include "core/paths.hpp"
@@ -57,26 +62,38 @@ struct Sequence {
   bool real_labels = false;
 };
 
-Sequence load_sequence(const std::string& name, const fs::path& root, int max_frames) {
+/// Calls fn(intrinsics, input, real_labels) for each of the first max_frames frames with a
+/// ground-truth pose, one frame in memory at a time.
+template <class Fn>
+void for_each_frame(const fs::path& root, int max_frames, Fn&& fn) {
   auto reader = open_dataset(root);
-  Sequence seq;
-  seq.name = name;
-  seq.K = reader->camera().depth;
-  for (size_t i = 0; i < reader->size() && static_cast<int>(seq.frames.size()) < max_frames; ++i) {
+  const PinholeIntrinsics K = reader->camera().depth;
+  int used = 0;
+  for (size_t i = 0; i < reader->size() && used < max_frames; ++i) {
     Frame f = reader->load(i);
     if (!f.gt_T_world_camera) continue;
-    IntegrationInput in = make_integration_input(f, seq.K, *f.gt_T_world_camera);
-    if (in.labels.empty()) {
+    ++used;
+    IntegrationInput in = make_integration_input(f, K, *f.gt_T_world_camera);
+    const bool real_labels = !in.labels.empty();
+    if (!real_labels) {
       // No label ground truth (TUM): synthetic labels (depth bands) so the label layers work.
       in.labels = cv::Mat(in.depth.size(), CV_8UC1);
       for (int v = 0; v < in.depth.rows; ++v)
         for (int u = 0; u < in.depth.cols; ++u)
           in.labels.at<uint8_t>(v, u) = static_cast<uint8_t>(1 + static_cast<int>(in.depth.at<float>(v, u) * 4) % 20);
-    } else {
-      seq.real_labels = true;
     }
-    seq.frames.push_back(in);
+    fn(K, std::move(in), real_labels);
   }
+}
+
+Sequence load_sequence(const std::string& name, const fs::path& root, int max_frames) {
+  Sequence seq;
+  seq.name = name;
+  for_each_frame(root, max_frames, [&](const PinholeIntrinsics& K, IntegrationInput in, bool real_labels) {
+    seq.K = K;
+    seq.real_labels = real_labels;
+    seq.frames.push_back(std::move(in));
+  });
   return seq;
 }
 
@@ -330,6 +347,98 @@ nlohmann::json hash_benchmark(const TsdfMap& map) {
   return j;
 }
 
+std::vector<Variant> all_variants() {
+  return {
+      {"ours_projective_core", "projective", false, false, false},
+      {"ours_grouped_core", "grouped", false, false, false},
+      {"ours_projective_labels_rgb", "projective", true, false, true},
+      {"ours_grouped_labels_rgb", "grouped", true, false, true},
+      {"ours_projective_labels_bayes_rgb", "projective", true, true, true},
+      {"ours_grouped_labels_bayes_rgb", "grouped", true, true, true},
+  };
+}
+/// The product's default configuration (TsdfConfig's integrator and layers).
+constexpr const char* kDefaultVariant = "ours_projective_labels_bayes_rgb";
+
+std::unique_ptr<Runner> make_runner(const std::string& name, const PinholeIntrinsics& K, double voxel, int threads) {
+#ifdef SEMAP_HAVE_OPEN3D
+  if (name == "open3d_scalable_rgb8") return std::make_unique<Open3DRunner>(K, voxel);
+  if (name == "open3d_voxel_block_grid") return std::make_unique<Open3DVoxelBlockGridRunner>(K, voxel, 4.0);
+#endif
+  for (const Variant& v : all_variants())
+    if (v.name == name) return std::make_unique<OursRunner>(v, voxel, threads);
+  throw std::runtime_error("unknown system " + name);
+}
+
+double current_rss_mb() {
+  long pages = 0, resident = 0;
+  if (FILE* f = std::fopen("/proc/self/statm", "r")) {
+    if (std::fscanf(f, "%ld %ld", &pages, &resident) != 2) resident = 0;
+    std::fclose(f);
+  }
+  return static_cast<double>(resident) * static_cast<double>(::sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0);
+}
+
+double peak_rss_mb() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_maxrss) / 1024.0;  // KiB
+}
+
+/// --memory-child: one system alone in this process, fed TUM frame by frame (one frame in
+/// memory); prints its peak RSS (before mesh extraction) and its own memory figures.
+int memory_child(const std::string& system, const fs::path& root, int frames, double voxel, int threads) {
+  std::unique_ptr<Runner> runner;
+  double rss_before = 0;
+  for_each_frame(root, frames, [&](const PinholeIntrinsics& K, IntegrationInput in, bool) {
+    if (!runner) {
+      runner = make_runner(system, K, voxel, threads);
+      rss_before = current_rss_mb();
+    }
+    runner->integrate(in);
+  });
+  if (!runner) return 1;
+  nlohmann::json j;
+  j["peak_rss_mb"] = peak_rss_mb();
+  j["rss_before_integration_mb"] = rss_before;
+  j["figures"] = runner->finish(threads);
+  std::cout << j.dump() << std::endl;
+  return 0;
+}
+
+/// Runs memory_child for `system` in a fresh process (this program re-executed).
+nlohmann::json memory_in_child(const char* self, const std::string& system, int frames, double voxel, int threads) {
+  const std::string cmd = std::string("'") + self + "' --memory-child " + system + " --frames " + std::to_string(frames) +
+                          " --voxels " + std::to_string(voxel) + " --threads " + std::to_string(threads);
+  std::string text;
+  if (FILE* p = ::popen(cmd.c_str(), "r")) {
+    char buf[4096];
+    while (size_t n = std::fread(buf, 1, sizeof(buf), p)) text.append(buf, n);
+    if (::pclose(p) != 0) text.clear();
+  }
+  const nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
+  if (j.is_discarded()) throw std::runtime_error("memory child failed: " + cmd);
+  return j;
+}
+
+/// Issue 20 memory figures, next to each other: bytes per allocated voxel (all layers, block
+/// and hash overhead included for ours) and the peak RSS of the default configuration and of
+/// both Open3D systems, each alone in its own process (the same binary: the same libraries).
+void add_memory_figures(nlohmann::json& systems, const char* self, int frames, double voxel, int threads) {
+  for (nlohmann::json& j : systems) {
+    const std::string name = j["variant"];
+    const bool ours = name.rfind("ours_", 0) == 0;
+    j["bytes_per_allocated_voxel"] = ours ? j["bytes_per_allocated_voxel_total"] : j["bytes_per_voxel_layers"];
+    if (ours && name != kDefaultVariant) continue;
+    const nlohmann::json child = memory_in_child(self, name, frames, voxel, threads);
+    j["peak_rss_mb_own_process"] = child["peak_rss_mb"];
+    j["rss_before_integration_mb"] = child["rss_before_integration_mb"];
+    j["map_memory_mb_own_process"] = child["figures"]["memory_mb"];
+    std::cerr << "memory " << voxel << " " << name << ": peak RSS " << child["peak_rss_mb"] << " MB (before integration "
+              << child["rss_before_integration_mb"] << " MB), " << j["bytes_per_allocated_voxel"] << " B/voxel\n";
+  }
+}
+
 std::vector<std::string> split_list(const std::string& s) {
   std::vector<std::string> out;
   std::stringstream ss(s);
@@ -358,6 +467,8 @@ int main(int argc, char** argv) {
   std::vector<double> voxels = {0.01, 0.02, 0.05};
   fs::path synthetic_dir;
   std::vector<std::string> only_variants;
+  std::string memory_system;  // --memory-child
+  bool memory = true;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i], v = argv[i + 1];
     if (a == "--frames") frames = std::stoi(v);
@@ -366,13 +477,16 @@ int main(int argc, char** argv) {
     else if (a == "--voxels") voxels = parse_list(v);
     else if (a == "--synthetic") synthetic_dir = v;
     else if (a == "--variants") only_variants = split_list(v);
+    else if (a == "--memory-child") memory_system = v;
+    else if (a == "--memory") memory = v != "0";
     else {
       std::cerr << "unknown option " << a << "\n";
       return 2;
     }
   }
-  std::vector<Sequence> sequences;
   const fs::path tum = data_dir(fs::path(SEMAP_SHARED_DIR) / "data") / "tum_fr1_rpy";
+  if (!memory_system.empty()) return memory_child(memory_system, tum, frames, voxels.at(0), threads);
+  std::vector<Sequence> sequences;
   if (fs::exists(tum)) sequences.push_back(load_sequence("tum_fr1_rpy", tum, frames));
   fs::path tmp;
   if (synthetic_dir.empty() && synthetic_frames > 0) {
@@ -385,14 +499,7 @@ int main(int argc, char** argv) {
   }
   if (!synthetic_dir.empty()) sequences.push_back(load_sequence("synthetic", synthetic_dir, synthetic_frames));
 
-  std::vector<Variant> variants = {
-      {"ours_projective_core", "projective", false, false, false},
-      {"ours_grouped_core", "grouped", false, false, false},
-      {"ours_projective_labels_rgb", "projective", true, false, true},
-      {"ours_grouped_labels_rgb", "grouped", true, false, true},
-      {"ours_projective_labels_bayes_rgb", "projective", true, true, true},
-      {"ours_grouped_labels_bayes_rgb", "grouped", true, true, true},
-  };
+  std::vector<Variant> variants = all_variants();
   if (!only_variants.empty())
     std::erase_if(variants, [&](const Variant& v) {
       return std::find(only_variants.begin(), only_variants.end(), v.name) == only_variants.end();
@@ -436,6 +543,7 @@ int main(int argc, char** argv) {
                   << j["cpu_ms_per_frame"] << " ms/frame\n";
         jv.push_back(j);
       }
+      if (seq.name == "tum_fr1_rpy" && memory) add_memory_figures(jv, argv[0], static_cast<int>(seq.frames.size()), voxel, threads);
       if (seq.name == "tum_fr1_rpy" && voxel == 0.02 && !variants.empty() && variants[0].name == "ours_projective_core")
         out["block_hash"] = hash_benchmark(static_cast<OursRunner&>(*runners[0]).tsdf->map());
       std::ostringstream key;

@@ -142,6 +142,8 @@ class Mapper {
   std::map<std::string, TimingSummary> timings() const;
   /// Adds a caller-side stage timing (e.g. "read") to timings().
   void add_timing(const std::string& stage, double ms);
+  /// The same, wall and CPU time since `start` (taken on the calling thread).
+  void add_timing(const std::string& stage, const StageStart& start);
 
   const SemapConfig& config() const;
   const CameraModel& camera() const;

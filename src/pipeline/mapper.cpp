@@ -183,6 +183,7 @@ struct Mapper::Impl {
   FrameArchive frame_archive;
   FrameReloader reloader;
   StageTimings timings;
+  double integration_workers_ms = 0;  ///< fusion thread: the integrator's worker CPU already charged
   mutable std::mutex log_mutex;
   std::vector<FrameLog> log;  ///< index = sequence number
   std::string first_segmentation_error;  ///< under log_mutex
@@ -220,20 +221,20 @@ TrackedFrame Mapper::Impl::locate(const Frame& frame, const std::optional<Pose>&
                                 : "has a pose, but this Mapper tracks (the first frame came without one)");
   TrackedFrame item;
   item.frame = frame;
-  const auto t0 = Clock::now();
+  const StageStart t0 = StageStart::now();
   if (given) {
     if (!is_valid_pose(*given, 1e-4)) throw Error("frame " + std::to_string(frame.index), "pose is not a rigid transform");
     item.T_world_camera = *given;
     if (config.tracking.depth_repair) item.frame.depth = repaired(frame.depth, frame.rgb, config.tracking);
-    timings.add("depth_repair", ms_since(t0));
+    timings.add("depth_repair", t0);
     return item;
   }
   std::lock_guard lock(tracker_mutex);
   if (!tracker) tracker = std::make_unique<Tracker>(config.tracking, camera);
   const TrackResult r = tracker->track(frame);
   item.held = r.status == TrackingStatus::lost && r.reference_keyframe < 0;
-  result.tracking_ms = ms_since(t0);
-  timings.add("tracking", result.tracking_ms);
+  result.tracking_ms = t0.wall_ms_since();
+  timings.add("tracking", t0);
   item.T_world_camera = r.T_world_camera;
   result.status = status_of(r);
   item.decoded_depth = frame.depth;
@@ -266,11 +267,11 @@ void Mapper::Impl::schedule_segmentation(TrackedFrame& item, bool keyframe, std:
 
 void Mapper::Impl::segment(Frame& frame) {
   // Never throws: fusion waits for a result (or nullopt) of every frame sent here.
-  const auto t0 = Clock::now();
+  const StageStart t0 = StageStart::now();
   try {
     SegmentationResult r = segmenter->segment(frame);
     r.frame_index = frame.index;
-    timings.add("segmentation", ms_since(t0));
+    timings.add("segmentation", t0);
     seg_results.put(frame.index, std::move(r));
   } catch (const std::exception& e) {
     spdlog::warn("segmentation of {} failed: {}", frame.rgb_path.empty() ? "frame " + std::to_string(frame.index)
@@ -307,7 +308,7 @@ void Mapper::Impl::fuse_waiting(bool block) {
 }
 
 void Mapper::Impl::fuse(TrackedFrame& item, const std::optional<SegmentationResult>& seg) {
-  const auto t0 = Clock::now();
+  const StageStart t0 = StageStart::now();
   register_colour(item.frame);
   IntegrationInput input = make_integration_input(item.frame, camera.depth, item.T_world_camera);
   input.labels = cv::Mat();
@@ -317,13 +318,17 @@ void Mapper::Impl::fuse(TrackedFrame& item, const std::optional<SegmentationResu
     input.probabilities = seg->probabilities;
     if (!*external_poses) label_archive.store(item.frame.index, input.labels);  // only a tracked run refreshes
   }
+  double workers_ms = 0;  // the integrator's TBB workers since the last frame (issue 20 budget)
   {
     std::lock_guard lock(tsdf_mutex);
     tsdf.integrate(input);
+    const double seen = tsdf.integrator().worker_cpu_ms();
+    workers_ms = seen - std::min(integration_workers_ms, seen);  // a refreshed TSDF starts at 0
+    integration_workers_ms = seen;
   }
   archive_for_refresh(item);
   ++frames_fused;
-  timings.add("tsdf_integration", ms_since(t0));
+  timings.add("tsdf_integration", t0, workers_ms);
 }
 
 void Mapper::Impl::register_colour(Frame& frame) const {
@@ -343,22 +348,22 @@ void Mapper::Impl::hand_to_objects(TrackedFrame& item, SegmentationResult seg) {
 }
 
 void Mapper::Impl::map_objects(ObjectWork& work) {
-  const auto t0 = Clock::now();
+  const StageStart t0 = StageStart::now();
   std::lock_guard lock(objects_mutex);
   if (!work.keyframe) {
     objects.accumulate(work.frame, work.segmentation, work.T_world_camera);
-    timings.add("object_accumulate", ms_since(t0));
+    timings.add("object_accumulate", t0);
     return;
   }
   objects.process(work.frame, work.segmentation, work.T_world_camera);
-  timings.add("object_map", ms_since(t0));
+  timings.add("object_map", t0);
   ++object_frames;
   objects_in_map = objects.instances().size();
 }
 
 void Mapper::Impl::archive_for_refresh(const TrackedFrame& item) {
   if (*external_poses) return;  // only a tracked run refreshes
-  const auto t0 = Clock::now();
+  const StageStart t0 = StageStart::now();
   if (reloader) {
     // The reloader gives the frame as read; what depth repair filled is kept so that the
     // refresh need not repair again (A1), nor decode colour without a colour layer.
@@ -366,7 +371,7 @@ void Mapper::Impl::archive_for_refresh(const TrackedFrame& item) {
   } else {
     frame_archive.store(item.frame.index, item.frame.depth, config.tsdf.colour_layer ? item.frame.rgb : cv::Mat());
   }
-  timings.add("refresh_archive", ms_since(t0));
+  timings.add("refresh_archive", t0);
 }
 
 Trajectory Mapper::Impl::current_trajectory() const {
@@ -443,7 +448,7 @@ void Mapper::Impl::refresh_map(const Trajectory& optimised) {
     objects.apply_pose_corrections(corrections);  // object points move with their frame
   }
   if (max_displacement <= 0.25 * config.tsdf.voxel_size) return;  // under a quarter voxel: keep the map
-  const auto t0 = Clock::now();
+  const StageStart t0 = StageStart::now();
   size_t missing = 0;
   for (size_t k = 0; k < frames.size(); ++k)
     if (frames[k].fused && !frame_archive.has(k) && !reloader) ++missing;
@@ -461,7 +466,7 @@ void Mapper::Impl::refresh_map(const Trajectory& optimised) {
     tsdf = std::move(rebuilt);
   }
   final_stats.map_refreshed = true;
-  timings.add("map_refresh", ms_since(t0));
+  timings.add("map_refresh", t0);
 }
 
 Mapper::Mapper(const SemapConfig& config, const CameraModel& camera, std::unique_ptr<Segmenter> segmenter) {
@@ -509,7 +514,7 @@ void Mapper::finish() {
   m.fusion_stage->close();
   m.objects_stage->close();
   if (m.tracker) {
-    const auto t0 = Clock::now();
+    const StageStart t0 = StageStart::now();
     Trajectory optimised;
     {
       std::lock_guard lock(m.tracker_mutex);
@@ -517,14 +522,14 @@ void Mapper::finish() {
       m.final_stats.loop_edges = m.tracker->stats().loop_edges;
       m.final_stats.held_frames = m.tracker->stats().held_frames;
     }
-    m.timings.add("pose_graph_final", ms_since(t0));
+    m.timings.add("pose_graph_final", t0);
     m.refresh_map(optimised);
     m.final_trajectory = std::move(optimised);
   } else {
     m.final_trajectory = m.current_trajectory();
   }
   {
-    const auto t0 = Clock::now();
+    const StageStart t0 = StageStart::now();
     std::lock_guard lock(m.objects_mutex);
     m.objects.finish();
     m.objects_in_map = m.objects.instances().size();
@@ -532,7 +537,7 @@ void Mapper::finish() {
     m.final_stats.objects_created = counts.created;
     m.final_stats.objects_deleted = counts.deleted;
     m.final_stats.objects_merged = counts.merged;
-    m.timings.add("object_map_final", ms_since(t0));
+    m.timings.add("object_map_final", t0);
   }
   m.finished = true;
 }
@@ -614,6 +619,7 @@ std::map<std::string, TimingSummary> Mapper::timings() const {
 }
 
 void Mapper::add_timing(const std::string& stage, double ms) { impl_->timings.add(stage, ms); }
+void Mapper::add_timing(const std::string& stage, const StageStart& start) { impl_->timings.add(stage, start); }
 
 const SemapConfig& Mapper::config() const { return impl_->config; }
 const CameraModel& Mapper::camera() const { return impl_->camera; }

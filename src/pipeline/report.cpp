@@ -136,9 +136,13 @@ cv::Mat render_topdown(const TriangleMesh& mesh, const Trajectory& trajectory,
 
 nlohmann::json timings_json(const std::map<std::string, TimingSummary>& timings) {
   nlohmann::json j = nlohmann::json::object();
-  for (const auto& [stage, s] : timings)
+  for (const auto& [stage, s] : timings) {
     j[stage] = {{"count", s.count}, {"mean_ms", s.mean_ms}, {"median_ms", s.median_ms}, {"p95_ms", s.p95_ms},
                 {"total_ms", s.total_ms}};
+    if (s.cpu_count == 0) continue;
+    j[stage]["cpu_mean_ms"] = s.cpu_mean_ms;  // CPU of the stage's thread and its TBB helpers
+    j[stage]["cpu_total_ms"] = s.cpu_total_ms;
+  }
   return j;
 }
 

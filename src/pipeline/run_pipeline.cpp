@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "semap/core/error.hpp"
+#include "core/cpu_time.hpp"
 #include "core/paths.hpp"
 #include "core/progress.hpp"
 #include "semap/io/dataset.hpp"
@@ -86,11 +87,11 @@ std::vector<ReportObject> report_objects(const std::vector<ObjectSummary>& objec
 /// nullopt at the end or when a stop was requested.
 std::optional<LoadedFrame> pull_frame(FrameSource& source, Mapper& mapper, const std::function<bool()>& stop) {
   if (stop && stop()) return std::nullopt;
-  const auto t0 = Clock::now();
+  const StageStart t0 = StageStart::now();
   try {
     std::optional<Frame> frame = source.next();
     if (!frame) return std::nullopt;
-    mapper.add_timing("read", seconds_since(t0) * 1e3);
+    mapper.add_timing("read", t0);
     return LoadedFrame{std::move(frame)};
   } catch (const Error& e) {
     spdlog::warn("skipping a frame: {}", e.what());
@@ -258,6 +259,8 @@ struct MappedSource {
   bool stopped_early = false;
   bool not_merged = false;  ///< --resume given, but the recording never relocalised into the saved map
   Clock::time_point reading_ended;  ///< the streaming stages' end (fps online), before finish()
+  double cpu_ms_reading_ended = 0;  ///< process CPU then
+  double opencv_workers_ms_reading_ended = 0;  ///< of OpenCV's workers then
 };
 
 MappedSource map_source(const RunOptions& options, const SemapConfig& config, FrameSource& source) {
@@ -275,6 +278,8 @@ MappedSource map_source(const RunOptions& options, const SemapConfig& config, Fr
   // Ctrl-C before any frame was mapped: there is no map to finish; publish nothing.
   if (out.fed == 0 && out.stopped_early) throw_if_interrupted();
   out.reading_ended = Clock::now();
+  out.cpu_ms_reading_ended = process_cpu_ms();
+  out.opencv_workers_ms_reading_ended = opencv_workers_cpu_ms();
   out.mapper->finish();
   if (out.mapper->stats().resumed_keyframes > 0 && options.show_progress && !never_relocalised(out.mapper->stats()))
     std::fprintf(stderr, "semap run: relocalised into the saved map after %zu held frames\n",
@@ -285,6 +290,7 @@ MappedSource map_source(const RunOptions& options, const SemapConfig& config, Fr
 RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
   config.validate();
   const auto wall_start = Clock::now();
+  const double cpu_start_ms = process_cpu_ms(), opencv_workers_start_ms = opencv_workers_cpu_ms();
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, config.pipeline.threads);
   const auto source = open_frame_source(options.dataset.string(), options.dataset_options);
   // Opened before mapping: a folder that cannot take outputs fails now, not after the work.
@@ -328,6 +334,8 @@ RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
   result.threads = config.pipeline.threads;
   result.timings = mapper.timings();
   result.fps_online = static_cast<double>(fed + skipped) / std::max(online_s, 1e-9);
+  result.cpu_s_online = (mapped.cpu_ms_reading_ended - cpu_start_ms) * 1e-3;
+  result.cpu_s_online_opencv_workers = (mapped.opencv_workers_ms_reading_ended - opencv_workers_start_ms) * 1e-3;
   result.wall_s = seconds_since(wall_start);
   result.fps_end_to_end = static_cast<double>(fed + skipped) / std::max(result.wall_s, 1e-9);
   result.peak_rss_mb = static_cast<double>(peak_rss_bytes()) / (1024.0 * 1024.0);
@@ -365,6 +373,8 @@ nlohmann::json to_json(const RunResult& r) {
       {"mesh_triangles", r.mesh_triangles},
       {"fps_online", r.fps_online},
       {"fps_end_to_end", r.fps_end_to_end},
+      {"cpu_s_online", r.cpu_s_online},
+      {"cpu_s_online_opencv_workers", r.cpu_s_online_opencv_workers},
       {"wall_s", r.wall_s},
       {"peak_rss_mb", r.peak_rss_mb},
       {"threads", r.threads},

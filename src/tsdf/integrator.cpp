@@ -20,6 +20,7 @@
 #include <cstdlib>
 #include <utility>
 
+#include "core/cpu_time.hpp"
 #include "semap/core/error.hpp"
 
 namespace semap {
@@ -162,17 +163,26 @@ inline Eigen::Vector3i floor_cells(const Eigen::Vector3f& p) {
 }
 
 /// Visits n cells from `cell`, each step along the axis of the smallest t_max (ties: as
-/// x < y ? (x < z ? x : z) : (y < z ? y : z)), picked by table: the choice is data-dependent, a
-/// branch on it mispredicts.
+/// x < y ? (x < z ? x : z) : (y < z ? y : z), i.e. x when x < y and x < z, else y when y < z,
+/// else z). The axis is chosen by selects on values kept in registers: a data-dependent branch
+/// mispredicts, and an indexed array update went through memory (store-forwarding latency on
+/// every step of the loop-carried chain).
 template <class Visit>
 inline void step_cells(std::array<int, 3> cell, const std::array<int, 3>& step, std::array<float, 3> t_max,
                        const std::array<float, 3>& t_delta, int n, Visit&& visit) {
-  static constexpr std::array<int8_t, 8> kAxis = {2, 2, 2, 0, 1, 2, 1, 0};  // [x<y | x<z << 1 | y<z << 2]
+  int cx = cell[0], cy = cell[1], cz = cell[2];
+  float tx = t_max[0], ty = t_max[1], tz = t_max[2];
   for (int i = 0; i < n; ++i) {
-    visit(Eigen::Vector3i(cell[0], cell[1], cell[2]));
-    const int axis = kAxis[(t_max[0] < t_max[1]) | (t_max[0] < t_max[2]) << 1 | (t_max[1] < t_max[2]) << 2];
-    cell[axis] += step[axis];
-    t_max[axis] += t_delta[axis];
+    visit(Eigen::Vector3i(cx, cy, cz));
+    const bool sx = (tx < ty) & (tx < tz);
+    const bool sy = !sx & (ty < tz);
+    const bool sz = !sx & !sy;
+    cx += sx ? step[0] : 0;
+    cy += sy ? step[1] : 0;
+    cz += sz ? step[2] : 0;
+    tx = sx ? tx + t_delta[0] : tx;
+    ty = sy ? ty + t_delta[1] : ty;
+    tz = sz ? tz + t_delta[2] : tz;
   }
 }
 
@@ -259,7 +269,8 @@ struct TouchedBlocks {
 // optional drop of far blocks (issue 8 memory bound) are the same; only run() differs.
 class ArenaIntegrator : public Integrator {
  public:
-  explicit ArenaIntegrator(const TsdfConfig& cfg) : arena_(arena_threads(cfg)) {}
+  explicit ArenaIntegrator(const TsdfConfig& cfg) : arena_(arena_threads(cfg)), worker_cpu_(arena_) {}
+  double worker_cpu_ms() const override { return worker_cpu_.total_ms(); }
 
   void integrate(TsdfMap& map, const IntegrationInput& in) override {
     const FrameSetup f = setup_frame(map, in);
@@ -273,6 +284,7 @@ class ArenaIntegrator : public Integrator {
 
  private:
   tbb::task_arena arena_;
+  ArenaWorkerCpu worker_cpu_;
 };
 
 /// The voxels one grouped ray crosses (structure of arrays) and their B6 signed distances
@@ -320,20 +332,31 @@ class GroupedIntegrator final : public ArenaIntegrator {
     ClassId label = 0;
     int32_t next = -1;
   };
-  struct Group {
+  /// A LabelSlot's running sums, held in registers by the grouping loop.
+  struct SlotSums {
+    float weight = 0, x = 0, y = 0, z = 0, confidence = 0, r = 0, g = 0, b = 0;
+    void load(const LabelSlot& s) {
+      weight = s.weight, x = s.weighted_sum.x(), y = s.weighted_sum.y(), z = s.weighted_sum.z();
+      confidence = s.confidence_sum, r = s.rgb_sum[0], g = s.rgb_sum[1], b = s.rgb_sum[2];
+    }
+    void store(LabelSlot& s) const {
+      s.weight = weight, s.weighted_sum = Eigen::Vector3f(x, y, z), s.confidence_sum = confidence;
+      s.rgb_sum[0] = r, s.rgb_sum[1] = g, s.rgb_sum[2] = b;
+    }
+  };
+  /// What grouping reads and writes of a group, 16 bytes (it touches one per change of voxel;
+  /// with the rest of Group, 100 bytes, they were its cache misses).
+  struct GroupHead {
     uint64_t key;
     int32_t first_slot;
     float total_weight;
-    // Filled after grouping:
+  };
+  /// The rest, filled after grouping (same index).
+  struct Group {
     Eigen::Vector3f point;
     ClassId label;
     Rgb8 colour;
     ClassDistribution observation;
-  };
-  struct RayUpdate {
-    VoxelIndex voxel;
-    float d;
-    int32_t group;
   };
   /// Consecutive updates of one chunk in one block.
   struct BlockRun {
@@ -341,7 +364,8 @@ class GroupedIntegrator final : public ArenaIntegrator {
     uint32_t count;
     int32_t slot;  ///< the block's index among the frame's touched blocks
   };
-  /// A RayUpdate bucketed by block: the voxel by its local index.
+  /// One voxel update of a ray, its voxel by the local index within its block (the block is
+  /// its run's).
   struct BlockUpdate {
     float d;
     int32_t group;
@@ -394,53 +418,62 @@ class GroupedIntegrator final : public ArenaIntegrator {
     // that size was a 4 MB fill and a cache miss per probe) and doubles at half load. Group ids
     // follow pixel order whatever the table size.
     size_t capacity = 1024;
-    while (capacity < 4 * groups_.size()) capacity *= 2;
+    while (capacity < 4 * heads_.size()) capacity *= 2;
     table_.assign(capacity, -1);
-    groups_.clear();
+    heads_.clear();
     slots_.clear();
+    // The current group's weight and label slot's sums are held in registers while consecutive
+    // pixels add to them (written back when the pixel's voxel or label changes): the same
+    // additions in the same order as into memory, without a store-forwarded load on each chain.
     uint64_t last_key = ~0ULL;
-    int32_t g = -1;
+    int32_t g = -1, s = -1;
+    ClassId last_label = 0;
+    float group_weight = 0;
+    SlotSums sums;
+    const uint8_t* labels = f.labels ? in.labels.ptr<uint8_t>(0) : nullptr;
+    const float* confidence = f.confidence ? in.confidence.ptr<float>(0) : nullptr;
+    const uint8_t* colour = f.colour ? in.colour.ptr<uint8_t>(0) : nullptr;
     for (size_t i = 0; i < n_pixels; ++i) {
       PixelPoint& pp = points_[i];
       if (pp.w == 0) continue;
       ++stats_.valid_pixels;
-      if (pp.key != last_key) {  // neighbouring pixels mostly fall into the same voxel
-        g = find_or_add_group(pp.key);
-        last_key = pp.key;
+      const ClassId label = labels ? labels[i] : 0;
+      const bool same_group = pp.key == last_key;  // neighbouring pixels mostly fall into the same voxel
+      if (!same_group || label != last_label) {
+        if (s >= 0) sums.store(slots_[s]);
+        if (!same_group) {
+          if (g >= 0) heads_[g].total_weight = group_weight;
+          g = find_or_add_group(pp.key);
+          last_key = pp.key;
+          group_weight = heads_[g].total_weight;
+        }
+        s = find_or_add_slot(heads_[g], label);
+        sums.load(slots_[s]);
+        last_label = label;
       }
       pp.group = g;
-      Group& group = groups_[g];
-      group.total_weight += pp.w;
-      const ClassId label = f.labels ? in.labels.ptr<uint8_t>(0)[i] : 0;
-      int32_t s = group.first_slot, last = -1;
-      while (s >= 0 && slots_[s].label != label) {
-        last = s;
-        s = slots_[s].next;
-      }
-      if (s < 0) {
-        s = static_cast<int32_t>(slots_.size());
-        slots_.emplace_back();
-        slots_.back().label = label;
-        if (last < 0) group.first_slot = s;
-        else slots_[last].next = s;
-      }
-      LabelSlot& slot = slots_[s];
-      slot.weight += pp.w;
-      slot.weighted_sum += pp.w * pp.p;
-      if (f.confidence) slot.confidence_sum += pp.w * in.confidence.ptr<float>(0)[i];
-      if (f.colour) {
-        const uint8_t* bgr = in.colour.ptr<uint8_t>(0) + 3 * i;
-        slot.rgb_sum[0] += pp.w * bgr[2];
-        slot.rgb_sum[1] += pp.w * bgr[1];
-        slot.rgb_sum[2] += pp.w * bgr[0];
+      const float w = pp.w;
+      group_weight += w;
+      sums.weight += w;
+      sums.x += w * pp.p.x(), sums.y += w * pp.p.y(), sums.z += w * pp.p.z();
+      if (confidence) sums.confidence += w * confidence[i];
+      if (colour) {
+        const uint8_t* bgr = colour + 3 * i;
+        sums.r += w * bgr[2], sums.g += w * bgr[1], sums.b += w * bgr[0];
       }
     }
-    stats_.rays = groups_.size();
+    if (s >= 0) sums.store(slots_[s]);
+    if (g >= 0) heads_[g].total_weight = group_weight;
+    stats_.rays = heads_.size();
     // 3. Each group's label = argmax W_l, its point = weighted mean of the points with that label.
     const bool want_observation = map.has_bayes_layer() && f.labels;
-    for (Group& g : groups_) {
+    // Reused from the last frame: every field read later is written below (an observation only
+    // where it is read: labelled groups with the Bayes layer).
+    groups_.resize(heads_.size());
+    for (size_t k = 0; k < heads_.size(); ++k) {
+      Group& g = groups_[k];
       const LabelSlot* best = nullptr;
-      for (int32_t s = g.first_slot; s >= 0; s = slots_[s].next) {
+      for (int32_t s = heads_[k].first_slot; s >= 0; s = slots_[s].next) {
         const LabelSlot& slot = slots_[s];
         if (!best || slot.weight > best->weight || (slot.weight == best->weight && slot.label < best->label)) best = &slot;
       }
@@ -456,7 +489,7 @@ class GroupedIntegrator final : public ArenaIntegrator {
     }
     if (want_observation && f.probabilities) group_probabilities(in, f, map.bayes().k());
     ray_info_.resize(groups_.size());
-    for (size_t g = 0; g < groups_.size(); ++g) ray_info_[g] = RayInfo{groups_[g].total_weight, groups_[g].colour, groups_[g].label};
+    for (size_t g = 0; g < groups_.size(); ++g) ray_info_[g] = RayInfo{heads_[g].total_weight, groups_[g].colour, groups_[g].label};
     // 4. Cast one ray per group through the truncation band (parallel in fixed chunks).
     constexpr size_t kChunk = 512;
     const size_t n_chunks = (groups_.size() + kChunk - 1) / kChunk;
@@ -464,8 +497,12 @@ class GroupedIntegrator final : public ArenaIntegrator {
     chunk_runs_.resize(n_chunks);
     const float delta = f.delta;
     tbb::parallel_for(size_t{0}, n_chunks, [&](size_t c) {
-      std::vector<RayUpdate>& out = chunk_updates_[c];
+      // The chunk's updates, by local index, as runs of one block (step 5 touches each run,
+      // not each update, and copies the runs).
+      std::vector<BlockUpdate>& out = chunk_updates_[c];
+      std::vector<BlockRun>& runs = chunk_runs_[c];
       out.clear();
+      runs.clear();
       RayCells cells;
       const size_t end = std::min(groups_.size(), (c + 1) * kChunk);
       for (size_t g = c * kChunk; g < end; ++g) {
@@ -478,16 +515,14 @@ class GroupedIntegrator final : public ArenaIntegrator {
         cells.clear();
         traverse_cells(a / f.s, b / f.s, [&](const Eigen::Vector3i& vox) { cells.add(vox); });
         cells.distances(dist, f.s, f.t_wc);
-        for (size_t j = 0; j < cells.size(); ++j)
-          if (!(cells.d[j] <= -delta)) out.push_back(RayUpdate{cells.voxel(j), cells.d[j], static_cast<int32_t>(g)});
-      }
-      // The chunk's updates as runs of one block (step 5 touches each run, not each update).
-      std::vector<BlockRun>& runs = chunk_runs_[c];
-      runs.clear();
-      for (const RayUpdate& u : out) {
-        const BlockIndex b = block_of_voxel(u.voxel);
-        if (runs.empty() || runs.back().block != b) runs.push_back(BlockRun{b, 0, -1});
-        ++runs.back().count;
+        for (size_t j = 0; j < cells.size(); ++j) {
+          if (cells.d[j] <= -delta) continue;
+          const VoxelIndex voxel = cells.voxel(j);
+          const BlockIndex b = block_of_voxel(voxel);
+          if (runs.empty() || runs.back().block != b) runs.push_back(BlockRun{b, 0, -1});
+          ++runs.back().count;
+          out.push_back(BlockUpdate{cells.d[j], static_cast<int32_t>(g), static_cast<uint16_t>(local_index(voxel))});
+        }
       }
     });
     // 5. Bucket the updates by block, stable (each block's updates in ray order): the blocks
@@ -513,11 +548,12 @@ class GroupedIntegrator final : public ArenaIntegrator {
     }
     sorted_.resize(n_updates);
     tbb::parallel_for(size_t{0}, n_chunks, [&](size_t c) {
-      const RayUpdate* u = chunk_updates_[c].data();
+      const BlockUpdate* u = chunk_updates_[c].data();
       for (const BlockRun& run : chunk_runs_[c]) {
         size_t& cursor = chunk_cursors_[c][run.slot];
-        for (uint32_t j = 0; j < run.count; ++j, ++u)
-          sorted_[cursor++] = BlockUpdate{u->d, u->group, static_cast<uint16_t>(local_index(u->voxel))};
+        std::copy(u, u + run.count, sorted_.begin() + static_cast<std::ptrdiff_t>(cursor));
+        u += run.count;
+        cursor += run.count;
       }
     });
     // 6. Apply per block in parallel (each block's updates in ray order: deterministic).
@@ -543,23 +579,39 @@ class GroupedIntegrator final : public ArenaIntegrator {
     stats_.allocated_blocks = touched.allocated;
   }
 
+  /// The slot of `label` in `group`'s list, a new one appended when absent.
+  int32_t find_or_add_slot(GroupHead& group, ClassId label) {
+    int32_t s = group.first_slot, last = -1;
+    while (s >= 0 && slots_[s].label != label) {
+      last = s;
+      s = slots_[s].next;
+    }
+    if (s >= 0) return s;
+    s = static_cast<int32_t>(slots_.size());
+    slots_.emplace_back();
+    slots_.back().label = label;
+    if (last < 0) group.first_slot = s;
+    else slots_[last].next = s;
+    return s;
+  }
+
   /// The group of voxel key `key`, a new one (the next id) when absent (B5 grouping).
   int32_t find_or_add_group(uint64_t key) {
     size_t mask = table_.size() - 1;
     for (size_t h = mix_key(key) & mask;; h = (h + 1) & mask) {
       const int32_t g = table_[h];
-      if (g >= 0 && groups_[g].key == key) return g;
+      if (g >= 0 && heads_[g].key == key) return g;
       if (g >= 0) continue;
-      const int32_t added = static_cast<int32_t>(groups_.size());
-      groups_.push_back(Group{key, -1, 0.0f, Eigen::Vector3f::Zero(), 0, {}, {}});
-      if (2 * groups_.size() <= table_.size()) {
+      const int32_t added = static_cast<int32_t>(heads_.size());
+      heads_.push_back(GroupHead{key, -1, 0.0f});
+      if (2 * heads_.size() <= table_.size()) {
         table_[h] = added;
         return added;
       }
       table_.assign(2 * table_.size(), -1);  // grow: re-insert every group, the new one too
       mask = table_.size() - 1;
-      for (size_t k = 0; k < groups_.size(); ++k) {
-        size_t j = mix_key(groups_[k].key) & mask;
+      for (size_t k = 0; k < heads_.size(); ++k) {
+        size_t j = mix_key(heads_[k].key) & mask;
         while (table_[j] >= 0) j = (j + 1) & mask;
         table_[j] = static_cast<int32_t>(k);
       }
@@ -618,9 +670,10 @@ class GroupedIntegrator final : public ArenaIntegrator {
 
   std::vector<PixelPoint> points_;
   std::vector<int32_t> table_;
+  std::vector<GroupHead> heads_;
   std::vector<Group> groups_;
   std::vector<LabelSlot> slots_;
-  std::vector<std::vector<RayUpdate>> chunk_updates_;
+  std::vector<std::vector<BlockUpdate>> chunk_updates_;
   std::vector<std::vector<BlockRun>> chunk_runs_;
   std::vector<std::vector<size_t>> chunk_cursors_;  ///< per chunk, per touched block
   std::vector<size_t> offsets_;

@@ -41,6 +41,9 @@ class Integrator {
   /// Fuses one frame into `map`. Throws semap::Error("integrate", ...) on inconsistent input.
   virtual void integrate(TsdfMap& map, const IntegrationInput& input) = 0;
   const IntegrationStats& last_stats() const { return stats_; }
+  /// CPU milliseconds TBB worker threads spent integrating so far (the calling thread's own
+  /// CPU not included): the pipeline's per-stage CPU budget (issue 20).
+  virtual double worker_cpu_ms() const { return 0.0; }
 
  protected:
   IntegrationStats stats_;

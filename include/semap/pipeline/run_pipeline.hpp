@@ -59,6 +59,8 @@ struct RunResult {
   double fps_online = 0.0;      ///< frames / time of the streaming stages
   double fps_end_to_end = 0.0;  ///< frames / whole run (final pass, refresh, outputs included)
   double wall_s = 0.0;
+  double cpu_s_online = 0.0;    ///< process CPU seconds (all threads) until the streaming stages ended
+  double cpu_s_online_opencv_workers = 0.0;  ///< of which OpenCV's worker threads (cv::parallel_for_)
   double peak_rss_mb = 0.0;
   int threads = 1;
   bool stopped_early = false;  ///< stop_requested() ended the input before its end

@@ -1,5 +1,7 @@
 #pragma once
-// Per-stage timing statistics for report.json: mean / median / p95 ms and count.
+// Per-stage timing statistics for report.json: mean / median / p95 ms and count, and the
+// stage's CPU time where it was measured (its thread plus the TBB workers of its parallel
+// loops, core/cpu_time.hpp): the per-stage CPU budget of issue 20.
 #include <chrono>
 #include <map>
 #include <mutex>
@@ -11,11 +13,24 @@ namespace semap {
 struct TimingSummary {
   size_t count = 0;
   double mean_ms = 0, median_ms = 0, p95_ms = 0, total_ms = 0;
+  size_t cpu_count = 0;  ///< samples with a CPU time (0: the stage measured wall time only)
+  double cpu_total_ms = 0, cpu_mean_ms = 0;
+};
+
+/// Start of a timed scope: wall clock and the calling thread's CPU (with its TBB helpers).
+struct StageStart {
+  std::chrono::steady_clock::time_point wall;
+  double cpu_ms;
+  static StageStart now();
+  double wall_ms_since() const;
 };
 
 class StageTimings {
  public:
   void add(const std::string& stage, double ms);
+  /// Wall and CPU time since `start` (same thread); extra_cpu_ms: CPU spent for this stage on
+  /// other threads (e.g. an integrator's own TBB arena).
+  void add(const std::string& stage, const StageStart& start, double extra_cpu_ms = 0.0);
   TimingSummary summary(const std::string& stage) const;
   std::vector<std::string> stages() const;  ///< in first-seen order
 
@@ -23,21 +38,20 @@ class StageTimings {
   mutable std::mutex mutex_;
   std::vector<std::string> order_;
   std::map<std::string, std::vector<double>> samples_;
+  std::map<std::string, std::pair<size_t, double>> cpu_;  ///< samples, total ms
 };
 
 /// Times a scope into a StageTimings entry.
 class ScopedStageTimer {
  public:
   ScopedStageTimer(StageTimings& timings, std::string stage)
-      : timings_(timings), stage_(std::move(stage)), start_(std::chrono::steady_clock::now()) {}
-  ~ScopedStageTimer() {
-    timings_.add(stage_, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_).count());
-  }
+      : timings_(timings), stage_(std::move(stage)), start_(StageStart::now()) {}
+  ~ScopedStageTimer() { timings_.add(stage_, start_); }
 
  private:
   StageTimings& timings_;
   std::string stage_;
-  std::chrono::steady_clock::time_point start_;
+  StageStart start_;
 };
 
 /// Peak resident set size of this process in bytes.

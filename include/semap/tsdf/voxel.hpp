@@ -101,14 +101,13 @@ class WeightQuantizer {
     // upper_[q]: the smallest weight that rounds to q + 1, i.e. round(log1p(w / unit) / scale)
     // without a logarithm per voxel update (it was 5 % of a TUM run's time).
     for (int q = 0; q < 255; ++q) upper_[q] = unit * std::expm1((q + 0.5) * scale_);
+    upper_[255] = std::numeric_limits<double>::infinity();  // a power-of-two table for first_above
   }
   float decode(uint8_t q) const { return table_[q]; }
   uint8_t encode(float weight) const {
     if (!(weight > 0)) return 0;
     if (weight >= max_) return 255;
-    const double w = weight;
-    const auto it = std::upper_bound(upper_.begin(), upper_.end(), w);  // first bound > w
-    return static_cast<uint8_t>(std::max<std::ptrdiff_t>(it - upper_.begin(), 1));  // observed stays > 0
+    return static_cast<uint8_t>(std::max(first_above(0, weight), 1));  // observed stays > 0
   }
   /// encode(weight), found by scanning upward from `from`: a voxel's new weight W + w (B6) is
   /// never below its old code, and once W is large it moves by 0-2 codes, where the scan ends
@@ -123,15 +122,28 @@ class WeightQuantizer {
     int q = from;
     for (const int last = std::min(q + kScanSteps, 255); q < last; ++q)
       if (upper_[q] > w) return static_cast<uint8_t>(std::max(q, 1));
-    return static_cast<uint8_t>(std::upper_bound(upper_.begin() + q, upper_.end(), w) - upper_.begin());
+    return static_cast<uint8_t>(first_above(q, weight));
   }
   double unit() const { return unit_; }
   double max() const { return max_; }
 
  private:
+  /// The first q >= from with upper_[q] > w (upper_bound over upper_[from..255], 255 at most:
+  /// upper_[255] is +inf), by binary lifting with selects: the same index as std::upper_bound
+  /// without its data-dependent branches (a grouped ray's weight jumps far: the scan above
+  /// fails and the search's 8 branches mispredicted).
+  int first_above(int from, double w) const {
+    int q = from - 1;  // upper_[q] <= w holds for q < from (the caller scanned them), or q = -1
+    for (int step = 128; step >= 1; step >>= 1) {
+      const int probe = q + step;
+      q = (probe <= 255 && upper_[static_cast<size_t>(probe)] <= w) ? probe : q;
+    }
+    return q + 1;
+  }
+
   double unit_, max_, scale_;
   std::array<float, 256> table_{};
-  std::array<double, 255> upper_{};
+  std::array<double, 256> upper_{};
 };
 
 // ---- Bayesian label layer (METHODS A6) ----
