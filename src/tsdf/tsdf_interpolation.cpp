@@ -38,13 +38,16 @@ bool interpolate_sdf(CachedVoxelLookup& lookup, const Eigen::Vector3f& q, float&
 
 namespace {
 
-Eigen::Vector3f projected(CachedVoxelLookup& lookup, const Eigen::Vector3f& p, float max_move) {
+Eigen::Vector3f projected(CachedVoxelLookup& lookup, const Eigen::Vector3f& p, float max_move, float keep_within) {
   constexpr int kSteps = 3;
   Eigen::Vector3f q = p;
   for (int step = 0; step < kSteps; ++step) {
     float sdf;
     Eigen::Vector3f gradient;
     if (!interpolate_sdf(lookup, q, sdf, &gradient)) return p;
+    // A point already this close to the fused surface is as good as the TSDF's own estimate of
+    // it (its discretisation error): only points the depth noise put farther off are moved.
+    if (step == 0 && std::fabs(sdf) <= keep_within) return p;
     const float norm = gradient.norm();
     if (!(norm > 1e-3f)) return p;
     q -= (sdf / norm) * (gradient / norm);
@@ -58,9 +61,10 @@ Eigen::Vector3f projected(CachedVoxelLookup& lookup, const Eigen::Vector3f& p, f
 std::vector<Eigen::Vector3f> project_onto_surface(const TsdfMap& map, const std::vector<Eigen::Vector3f>& points) {
   std::vector<Eigen::Vector3f> out(points.size());
   const float max_move = static_cast<float>(map.config().truncation());
+  const float keep_within = 0.25f * map.voxel_size();
   tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
     CachedVoxelLookup lookup(map);
-    for (size_t i = r.begin(); i < r.end(); ++i) out[i] = projected(lookup, points[i], max_move);
+    for (size_t i = r.begin(); i < r.end(); ++i) out[i] = projected(lookup, points[i], max_move, keep_within);
   });
   return out;
 }

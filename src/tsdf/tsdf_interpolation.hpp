@@ -45,7 +45,8 @@ bool interpolate_sdf(CachedVoxelLookup& lookup, const Eigen::Vector3f& q, float&
 /// Each point moved onto the fused surface (the sdf's zero level) along the sdf gradient, a
 /// few Newton steps: single-frame back-projections carry the sensor's depth noise, the TSDF is
 /// the estimate of the surface from every frame (METHODS B3, B6). A point where the sdf cannot
-/// be interpolated, or which would move farther than the truncation distance, stays where it is.
+/// be interpolated, which lies within a quarter voxel of the surface already, or which would
+/// move farther than the truncation distance, stays where it is.
 /// Parallel (TBB); the map must not change meanwhile.
 std::vector<Eigen::Vector3f> project_onto_surface(const TsdfMap& map, const std::vector<Eigen::Vector3f>& points);
 
