@@ -77,4 +77,9 @@ void require_same_ferns(const TrackingConfig& saved, const TrackingConfig& given
   check("max_depth", saved.max_depth, given.max_depth);
 }
 
+std::filesystem::path map_file_of(const std::filesystem::path& folder_or_file) {
+  std::error_code ec;
+  return std::filesystem::is_directory(folder_or_file, ec) ? folder_or_file / "map.semap" : folder_or_file;
+}
+
 }  // namespace semap

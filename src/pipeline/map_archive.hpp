@@ -21,6 +21,10 @@ CameraModel decode_camera_section(std::string_view bytes, const std::filesystem:
 std::string encode_config_section(const SemapConfig& config);
 SemapConfig decode_config_section(const std::string& yaml, const std::filesystem::path& path);
 
+/// A saved map given as an output folder (its map.semap) or as the file itself (--resume,
+/// semap merge).
+std::filesystem::path map_file_of(const std::filesystem::path& folder_or_file);
+
 /// Throws Error(path, ...) naming the first tracking.fern_* key whose value differs: the saved
 /// keyframes' fern codes compare only with codes of the same ferns (METHODS A3).
 void require_same_ferns(const TrackingConfig& saved, const TrackingConfig& given, const std::filesystem::path& path);

@@ -107,9 +107,8 @@ std::vector<std::pair<std::string, Trajectory>> recordings_of(const fs::path& di
   return out;
 }
 
-/// A folder given as its map.semap, or the folder itself.
-fs::path folder_of(const fs::path& p) { return fs::is_directory(p) ? p : p.parent_path(); }
-fs::path map_of(const fs::path& p) { return fs::is_directory(p) ? p / "map.semap" : p; }
+/// The output folder of a map given as the folder or its map.semap.
+fs::path folder_of(const fs::path& p) { return map_file_of(p).parent_path(); }
 
 /// Writes every recording's trajectory in A's world frame; B's names made unique.
 std::vector<std::string> write_trajectories(const fs::path& a, const fs::path& b, const Pose& T_a_b, const fs::path& dir) {
@@ -174,7 +173,7 @@ MapMergeResult merge_maps(const fs::path& a, const fs::path& b, const fs::path& 
   OutputFolder out(out_dir, {.tool = "merge", .publish_last = {"report.json"}});
   const fs::path dir = out.staging();
   SemapConfig config;
-  MapMergeResult r = merge_files(map_of(a), map_of(b), dir / "map.semap", config);
+  MapMergeResult r = merge_files(map_file_of(a), map_file_of(b), dir / "map.semap", config);
   if (!r.merged) return r;  // out's destructor removes the staging folder: nothing written
   // The merged map as a Mapper gives the mesh and objects exactly as `semap run` writes them;
   // no segmenter is needed to read it.

@@ -1,5 +1,7 @@
 #include "semap/pipeline/run_pipeline.hpp"
 
+#include "pipeline/map_archive.hpp"
+
 #include <spdlog/spdlog.h>
 #include <tbb/global_control.h>
 
@@ -193,8 +195,7 @@ SemapConfig mapper_config_for(const SemapConfig& config, const FrameSource& sour
 /// The saved map a run continues (RunOptions::resume_from): a folder's map.semap, or the file.
 std::filesystem::path saved_map_path(const RunOptions& options) {
   std::error_code ec;
-  const std::filesystem::path path = std::filesystem::is_directory(options.resume_from, ec)
-                                         ? options.resume_from / "map.semap" : options.resume_from;
+  const std::filesystem::path path = map_file_of(options.resume_from);
   const std::filesystem::path out = std::filesystem::weakly_canonical(options.out_dir, ec);
   if (std::filesystem::weakly_canonical(path.parent_path(), ec) == out)
     throw Error(options.out_dir, "--out is the folder --resume reads: write the continued map to another folder");
