@@ -99,6 +99,7 @@ json run_ours(const std::vector<Frame>& frames, const CameraModel& camera, const
   j["keyframes"] = s.keyframes;
   j["keyframe_reuses"] = s.keyframe_reuses;
   j["loop_edges"] = s.loop_edges;
+  j["local_edges"] = s.local_edges;
   j["optimisations"] = s.optimisations;
   j["lost_frames"] = lost;
   j["relocalised_frames"] = reloc;

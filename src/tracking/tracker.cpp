@@ -86,6 +86,15 @@ struct Tracker::Impl {
   FernDatabase ferns;
   TrackerStats stats;
   uint64_t pose_version = 0;  ///< bumped whenever keyframe poses are corrected
+  /// Completed ICP target pyramids of the local_edge_keyframes + 1 keyframes referenced last
+  /// (made, re-used or relocalised into), kept for local edges: a fresh pyramid costs more than
+  /// the registration itself (first-touch memory).
+  struct RecentTarget {
+    uint64_t last_use = 0;
+    std::shared_ptr<const std::vector<DepthLevel>> pyramid;
+  };
+  std::map<int, RecentTarget> recent_targets;
+  uint64_t target_uses = 0;
 
   // Worker.
   std::thread worker;
@@ -288,16 +297,102 @@ struct Tracker::Impl {
     }
   }
 
-  /// Looks for a loop from keyframe `id` to older keyframes through the ferns, verifies it
-  /// geometrically (A2) and optimises the pose graph when one is found.
+  /// Keeps `id`'s completed target pyramid as one of the most recently referenced keyframes.
+  void remember_target(int id, const std::vector<DepthLevel>& target) {
+    if (cfg.local_edge_keyframes <= 0) return;
+    std::lock_guard<std::mutex> lock(mutex);
+    recent_targets[id] = {++target_uses, std::make_shared<const std::vector<DepthLevel>>(target)};  // shares the pixels
+    while (int(recent_targets.size()) > cfg.local_edge_keyframes + 1) {
+      auto oldest = recent_targets.begin();
+      for (auto it = recent_targets.begin(); it != recent_targets.end(); ++it)
+        if (it->second.last_use < oldest->second.last_use) oldest = it;
+      recent_targets.erase(oldest);
+    }
+  }
+
+  std::shared_ptr<const std::vector<DepthLevel>> recent_target(int id) const {
+    std::lock_guard<std::mutex> lock(mutex);
+    const auto it = recent_targets.find(id);
+    return it == recent_targets.end() ? nullptr : it->second.pyramid;
+  }
+
+  /// A new keyframe's graph edges beyond its parent (A4): local edges to the keyframes it still
+  /// shares a view with, loop edges to old ones the ferns propose; optimises when any was added.
   void process_keyframe(int id) {
     const tracking_detail::SerialScope serial(!cfg.parallel);
     std::shared_ptr<const Keyframe> kf;
-    std::vector<std::pair<double, std::shared_ptr<const Keyframe>>> candidates;
     {
       std::lock_guard<std::mutex> lock(mutex);
       kf = keyframes[id];
-      const auto sims = ferns.similarities(kf->code);
+    }
+    // Registered as the source: the completed pyramid made with the keyframe when still cached.
+    auto kf_pyramid = recent_target(id);
+    if (!kf_pyramid) kf_pyramid = std::make_shared<const std::vector<DepthLevel>>(pyramid(kf->depth, kf->gray, true));
+    const bool local = add_local_edges(*kf, *kf_pyramid);
+    const bool loop = add_loop_edges(*kf, *kf_pyramid);
+    if (local || loop) optimise();
+  }
+
+  /// Local edges (issue 16): the parent chain alone drifts at every keyframe switch (fast
+  /// rotation switches keyframes several times a second). The keyframe is registered against
+  /// the nearest of the last few keyframes by pose (not its parent) from their current relative
+  /// pose, and each registration that converges there ties the two views directly.
+  bool add_local_edges(const Keyframe& kf, const std::vector<DepthLevel>& kf_pyramid) {
+    if (cfg.local_edge_keyframes <= 0) return false;
+    struct Target {
+      double score;
+      int id;
+      Pose T_other_kf;  ///< current estimate: the ICP start
+      std::shared_ptr<const std::vector<DepthLevel>> pyramid;
+    };
+    std::vector<Target> targets;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      const Pose T_world_kf = kf_pose.at(kf.id);
+      for (const auto& [other, entry] : recent_targets) {
+        if (other >= kf.id || other == kf.parent) continue;
+        const Pose T_other_kf = kf_pose.at(other).inverse() * T_world_kf;
+        const double score = keyframe_score(T_other_kf);
+        if (score <= cfg.local_edge_max_score) targets.push_back({score, other, T_other_kf, entry.pyramid});
+      }
+    }
+    std::sort(targets.begin(), targets.end(), [](const Target& a, const Target& b) { return a.score < b.score; });
+    if (int(targets.size()) > cfg.local_edge_keyframes) targets.resize(size_t(cfg.local_edge_keyframes));
+    bool added = false;
+    for (const auto& [score, other, guess, target] : targets) {
+      const IcpResult icp = icp_point_to_plane(kf_pyramid, *target, guess, icp_params);
+      // Verified as a loop is, and it must stay where the odometry put it (a local edge corrects
+      // drift of a few keyframes, not a wrong basin).
+      if (!icp_acceptable(icp, cfg.loop_max_icp_rmse, cfg.loop_min_overlap) ||
+          pose_distance(guess, icp.T_target_source) > cfg.ransac_icp_agreement)
+        continue;
+      PoseGraphEdge edge;
+      edge.from = other;
+      edge.to = kf.id;
+      edge.T_from_to = icp.T_target_source;
+      edge.information = edge_information(icp);
+      std::lock_guard<std::mutex> lock(mutex);
+      graph.add_edge(edge);
+      ++stats.local_edges;
+      added = true;
+    }
+    return added;
+  }
+
+  /// Pose distance in keyframe spacings: translation / keyframe_translation + rotation /
+  /// keyframe_rotation_deg (1 = the motion that makes a new keyframe).
+  double keyframe_score(const Pose& rel) const {
+    return rel.translation().norm() / cfg.keyframe_translation + deg(rotation_angle(rel)) / cfg.keyframe_rotation_deg;
+  }
+
+  /// Looks for a loop from keyframe `kf` to older keyframes through the ferns (A3) and verifies
+  /// it geometrically (A2); true when a loop edge was added.
+  bool add_loop_edges(const Keyframe& kf, const std::vector<DepthLevel>& kf_pyramid) {
+    const int id = kf.id;
+    std::vector<std::pair<double, std::shared_ptr<const Keyframe>>> candidates;
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      const auto sims = ferns.similarities(kf.code);
       const auto& ids = ferns.ids();
       for (size_t i = 0; i < ids.size(); ++i) {
         const int other = ids[i];
@@ -308,12 +403,10 @@ struct Tracker::Impl {
     std::stable_sort(candidates.begin(), candidates.end(),
                      [](const auto& a, const auto& b) { return a.first > b.first; });
     if (int(candidates.size()) > cfg.loop_candidates) candidates.resize(cfg.loop_candidates);
-    if (candidates.empty()) return;
-    const auto kf_pyramid = pyramid(kf->depth, kf->gray, /*source_only=*/true);  // registered as the source
     bool added = false;
     for (const auto& [sim, other] : candidates) {
       const auto other_pyramid = pyramid(other->depth, other->gray);
-      Registration reg = register_to(kf->features, kf_pyramid, other->features, other_pyramid, nullptr,
+      Registration reg = register_to(kf.features, kf_pyramid, other->features, other_pyramid, nullptr,
                                      uint32_t(cfg.seed) + uint32_t(id) * 7919u);
       if (!reg.ok || reg.icp.rmse > cfg.loop_max_icp_rmse || reg.icp.overlap < cfg.loop_min_overlap) continue;
       std::lock_guard<std::mutex> lock(mutex);
@@ -329,7 +422,7 @@ struct Tracker::Impl {
       ++stats.loop_edges;
       added = true;
     }
-    if (added) optimise();
+    return added;
   }
 
   /// Optimises a snapshot of the graph without holding the lock, then applies the result;
@@ -568,6 +661,7 @@ struct Tracker::Impl {
     reference = id;
     ref_pyramid = std::move(frame_pyramid);
     complete_target_pyramid(ref_pyramid, true);
+    remember_target(id, ref_pyramid);
     submit_keyframe(id);
   }
 
@@ -583,9 +677,7 @@ struct Tracker::Impl {
       std::lock_guard<std::mutex> lock(mutex);
       for (const auto& [id, pose] : kf_pose) {
         if (id == reference) continue;
-        const Pose rel = pose.inverse() * T_world_frame;
-        const double score = rel.translation().norm() / cfg.keyframe_translation +
-                             deg(rotation_angle(rel)) / cfg.keyframe_rotation_deg;
+        const double score = keyframe_score(pose.inverse() * T_world_frame);
         if (score < best_score) {
           best_score = score;
           best = id;
@@ -617,6 +709,7 @@ struct Tracker::Impl {
     }
     reference = best;
     ref_pyramid = kf_pyramid;
+    remember_target(best, ref_pyramid);
     T_ref_frame = icp.T_target_source;
     return true;
   }
@@ -667,6 +760,7 @@ struct Tracker::Impl {
       out = reg;
       reference = kf->id;
       ref_pyramid = std::move(kf_pyramid);
+      remember_target(reference, ref_pyramid);
       velocity_valid = false;
       return true;
     }

@@ -55,7 +55,7 @@ struct KeyframeInfo {
 
 struct TrackerStats {
   size_t frames = 0, keyframes = 0, lost_frames = 0, relocalisations = 0;
-  size_t loop_edges = 0, keyframe_reuses = 0, optimisations = 0;
+  size_t loop_edges = 0, local_edges = 0, keyframe_reuses = 0, optimisations = 0;
   size_t resumed_keyframes = 0;  ///< keyframes of the map this tracker continues (resume())
   size_t held_frames = 0;        ///< frames of a resumed map before the first relocalisation
 };

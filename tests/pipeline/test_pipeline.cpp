@@ -163,6 +163,7 @@ TEST(PipelineRefresh, RepairArchiveGivesTheSameMapAsRepairingAgain) {
   auto run = [&](int cache_mb) {
     SemapConfig config;
     config.pipeline.threads = 1;
+    config.tracking.background_loop_closure = false;  // loop edges at the same frame in both runs
     config.pipeline.refresh_cache_mb = cache_mb;
     RunOptions o;
     o.dataset = tum;

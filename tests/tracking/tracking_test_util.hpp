@@ -41,7 +41,7 @@ inline TrackingRun run_tracker_on(const std::filesystem::path& dir, size_t max_f
   std::cout << "[tracking] " << dir.filename().string() << " frames=" << n << " ATE=" << run.ate_rmse * 100
             << " cm (before final pass " << run.ate_before_final * 100 << " cm) RPE=" << run.rpe_trans * 100
             << " cm/s " << run.rpe_rot << " deg/s keyframes=" << run.stats.keyframes
-            << " reuses=" << run.stats.keyframe_reuses << " loops=" << run.stats.loop_edges
+            << " reuses=" << run.stats.keyframe_reuses << " loops=" << run.stats.loop_edges << " local=" << run.stats.local_edges
             << " lost=" << run.lost << std::endl;
   return run;
 }

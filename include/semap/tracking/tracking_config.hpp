@@ -126,6 +126,8 @@ struct TrackingConfig {
   double loop_max_icp_rmse = 0.02;     ///< geometric verification: ICP RMSE limit, metres
   double loop_min_overlap = 0.35;      ///< geometric verification: ICP overlap limit (fraction)
   double loop_max_pose_disagreement = 0.5;  ///< reject a loop whose correction exceeds this, metres
+  int local_edge_keyframes = 0;        ///< recently referenced keyframes (nearest by pose, not the parent) each new keyframe is registered against (0 = parent chain only; 3 measured better on TUM fr1_rpy, worse on 7-Scenes: off by default)
+  double local_edge_max_score = 3.0;   ///< ... within this pose distance in keyframe spacings (translation / keyframe_translation + rotation / keyframe_rotation_deg)
 
   // --- A4 pose graph ---
   bool pose_graph = true;              ///< optimise keyframe poses (odometry + loop edges)
@@ -188,6 +190,8 @@ struct TrackingConfig {
     v.param("loop_max_icp_rmse", loop_max_icp_rmse, "m", "loop verification ICP RMSE limit", positive(1.0));
     v.param("loop_min_overlap", loop_min_overlap, "", "loop verification overlap limit", fraction());
     v.param("loop_max_pose_disagreement", loop_max_pose_disagreement, "m", "largest accepted loop correction", positive(100.0));
+    v.param("local_edge_keyframes", local_edge_keyframes, "keyframes", "earlier keyframes near by pose each new keyframe gets a graph edge to (0 = parent chain only)", {0, 100});
+    v.param("local_edge_max_score", local_edge_max_score, "keyframe spacings", "how near: translation / keyframe_translation + rotation / keyframe_rotation_deg", non_negative(100.0));
     v.param("pose_graph", pose_graph, "", "optimise keyframe poses with Ceres (A4)");
     v.param("pose_graph_iterations", pose_graph_iterations, "", "Ceres iterations per optimisation", {1, 10000});
     v.param("pose_graph_loop_huber", pose_graph_loop_huber, "", "Huber scale on loop edges (whitened)", positive(1000.0));
