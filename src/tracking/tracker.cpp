@@ -5,6 +5,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <deque>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <numeric>
@@ -297,6 +298,8 @@ struct Tracker::Impl {
     }
   }
 
+  using SourcePyramid = std::function<const std::vector<DepthLevel>&()>;
+
   /// Keeps `id`'s completed target pyramid as one of the most recently referenced keyframes.
   void remember_target(int id, const std::vector<DepthLevel>& target) {
     if (cfg.local_edge_keyframes <= 0) return;
@@ -325,11 +328,15 @@ struct Tracker::Impl {
       std::lock_guard<std::mutex> lock(mutex);
       kf = keyframes[id];
     }
-    // Registered as the source: the completed pyramid made with the keyframe when still cached.
-    auto kf_pyramid = recent_target(id);
-    if (!kf_pyramid) kf_pyramid = std::make_shared<const std::vector<DepthLevel>>(pyramid(kf->depth, kf->gray, true));
-    const bool local = add_local_edges(*kf, *kf_pyramid);
-    const bool loop = add_loop_edges(*kf, *kf_pyramid);
+    // Registered as the source: the completed pyramid made with the keyframe when still cached,
+    // else built only when a registration needs it (most keyframes have no loop candidate).
+    auto cached = recent_target(id);
+    const SourcePyramid source = [&]() -> const std::vector<DepthLevel>& {
+      if (!cached) cached = std::make_shared<const std::vector<DepthLevel>>(pyramid(kf->depth, kf->gray, true));
+      return *cached;
+    };
+    const bool local = add_local_edges(*kf, source);
+    const bool loop = add_loop_edges(*kf, source);
     if (local || loop) optimise();
   }
 
@@ -337,7 +344,7 @@ struct Tracker::Impl {
   /// rotation switches keyframes several times a second). The keyframe is registered against
   /// the nearest of the last few keyframes by pose (not its parent) from their current relative
   /// pose, and each registration that converges there ties the two views directly.
-  bool add_local_edges(const Keyframe& kf, const std::vector<DepthLevel>& kf_pyramid) {
+  bool add_local_edges(const Keyframe& kf, const SourcePyramid& kf_pyramid) {
     if (cfg.local_edge_keyframes <= 0) return false;
     struct Target {
       double score;
@@ -360,7 +367,7 @@ struct Tracker::Impl {
     if (int(targets.size()) > cfg.local_edge_keyframes) targets.resize(size_t(cfg.local_edge_keyframes));
     bool added = false;
     for (const auto& [score, other, guess, target] : targets) {
-      const IcpResult icp = icp_point_to_plane(kf_pyramid, *target, guess, icp_params);
+      const IcpResult icp = icp_point_to_plane(kf_pyramid(), *target, guess, icp_params);
       // Verified as a loop is, and it must stay where the odometry put it (a local edge corrects
       // drift of a few keyframes, not a wrong basin).
       if (!icp_acceptable(icp, cfg.loop_max_icp_rmse, cfg.loop_min_overlap) ||
@@ -387,7 +394,7 @@ struct Tracker::Impl {
 
   /// Looks for a loop from keyframe `kf` to older keyframes through the ferns (A3) and verifies
   /// it geometrically (A2); true when a loop edge was added.
-  bool add_loop_edges(const Keyframe& kf, const std::vector<DepthLevel>& kf_pyramid) {
+  bool add_loop_edges(const Keyframe& kf, const SourcePyramid& kf_pyramid) {
     const int id = kf.id;
     std::vector<std::pair<double, std::shared_ptr<const Keyframe>>> candidates;
     {
@@ -406,7 +413,7 @@ struct Tracker::Impl {
     bool added = false;
     for (const auto& [sim, other] : candidates) {
       const auto other_pyramid = pyramid(other->depth, other->gray);
-      Registration reg = register_to(kf.features, kf_pyramid, other->features, other_pyramid, nullptr,
+      Registration reg = register_to(kf.features, kf_pyramid(), other->features, other_pyramid, nullptr,
                                      uint32_t(cfg.seed) + uint32_t(id) * 7919u);
       if (!reg.ok || reg.icp.rmse > cfg.loop_max_icp_rmse || reg.icp.overlap < cfg.loop_min_overlap) continue;
       std::lock_guard<std::mutex> lock(mutex);
