@@ -57,6 +57,8 @@ void add_run_command(CLI::App& app, CommandRunner& run) {
   cmd->add_option("--voxel", args->voxel, "TSDF voxel size in metres (overrides the config)")->check(finite_in(0.001, 1.0));
   cmd->add_option("--max-frames", args->max_frames, "stop after N frames (0 = all)")->check(CLI::Range(int64_t{0}, int64_t{1} << 40));
   cmd->add_option("--threads", args->threads, "worker threads (overrides the config; 1 = deterministic)")->check(CLI::Range(1, 256));
+  cmd->add_flag("--realtime", args->options.realtime,
+                "feed the frames at their recorded pace (timestamps), as the camera delivered them; none is dropped");
   cmd->add_flag("--no-eval", [args](int64_t) { args->options.evaluate = false; }, "skip evaluation against ground truth");
   cmd->add_flag("--view", args->view, "serve the growing map to the browser viewer on 127.0.0.1 while mapping");
   cmd->add_option("--port", args->view_port, "--view: TCP port (0: any free port)")->check(CLI::Range(0, 65535))->capture_default_str();

@@ -108,6 +108,13 @@ std::unique_ptr<Segmenter> segmenter_from_config(const SemapConfig& config, cons
   return make_segmenter(config.segmentation.segmenter, config.segmentation, camera);
 }
 
+/// `pipeline.threads: 1` promises every stage inline and byte-identical outputs: loop closure
+/// too, whose background worker adds its edges at a frame that depends on thread timing.
+SemapConfig with_inline_stages(SemapConfig config) {
+  if (config.pipeline.threads == 1) config.tracking.background_loop_closure = false;
+  return config;
+}
+
 }  // namespace
 
 const char* to_string(FrameStatus status) {
@@ -126,7 +133,7 @@ SegmentationResult segmentation_from_label_images(const cv::Mat& labels, const c
 
 struct Mapper::Impl {
   Impl(const SemapConfig& c, const CameraModel& cam, std::unique_ptr<Segmenter> seg)
-      : config(c),
+      : config(with_inline_stages(c)),
         camera(cam),
         segmenter(seg ? std::move(seg) : segmenter_from_config(c, cam)),
         tsdf(c.tsdf),

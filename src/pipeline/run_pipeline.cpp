@@ -101,6 +101,25 @@ std::optional<LoadedFrame> pull_frame(FrameSource& source, Mapper& mapper, const
   }
 }
 
+/// RunOptions::realtime: holds each frame until the wall time since the first frame reaches its
+/// recorded time since the first frame (timestamps that do not increase give no wait). Waits in
+/// short slices so that a stop request (Ctrl-C) is not delayed.
+class RecordedPace {
+ public:
+  explicit RecordedPace(const std::function<bool()>& stop) : stop_(stop) {}
+  void wait_for(double timestamp_s) {
+    if (!first_) first_ = std::pair{timestamp_s, Clock::now()};
+    const auto due = first_->second + std::chrono::duration_cast<Clock::duration>(
+                                          std::chrono::duration<double>(std::max(0.0, timestamp_s - first_->first)));
+    while (Clock::now() < due && !(stop_ && stop_()))
+      std::this_thread::sleep_for(std::min<Clock::duration>(due - Clock::now(), std::chrono::milliseconds(50)));
+  }
+
+ private:
+  const std::function<bool()>& stop_;
+  std::optional<std::pair<double, Clock::time_point>> first_;
+};
+
 /// Hints for a frame: the ground-truth pose when the run uses them (nullopt: skip the frame).
 std::optional<FrameHints> hints_for(const Frame& frame, PoseSource poses) {
   FrameHints hints;
@@ -122,9 +141,11 @@ std::pair<size_t, size_t> feed_frames(Mapper& mapper, FrameSource& source, const
                     [&] { return pull_frame(source, mapper, options.stop_requested); });
   Progress progress("semap run", total);
   size_t fed = 0, skipped = 0, objects = 0;
+  RecordedPace pace(options.stop_requested);
   while (auto loaded = frames.next()) {
     const auto hints = loaded->frame ? hints_for(*loaded->frame, options.poses) : std::nullopt;
     if (hints) {
+      if (options.realtime) pace.wait_for(loaded->frame->timestamp);
       mapper.add_frame(*loaded->frame, *hints);
       ++fed;
     } else {

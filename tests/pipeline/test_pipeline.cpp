@@ -90,6 +90,31 @@ TEST_F(PipelineTest, OneThreadRunsAreByteIdentical) {
     EXPECT_TRUE(slurp(out("det_a") / f) == slurp(out("det_b") / f)) << f << " differs";  // no byte diff
 }
 
+// RunOptions::realtime: the frames are fed at their recorded pace, so the run takes at least
+// the recorded span; the pace changes when frames arrive, never what is made of them.
+TEST_F(PipelineTest, RealtimeRunTakesTheRecordedSpanAndGivesTheSameMap) {
+  SemapConfig config;
+  config.pipeline.threads = 1;
+  config.tsdf.voxel_size = 0.04;
+  RunOptions fast = gt_options("pace_fast"), paced = gt_options("pace_realtime");
+  fast.max_frames = paced.max_frames = 20;
+  fast.evaluate = paced.evaluate = false;
+  paced.realtime = true;
+  run_pipeline(fast, config);
+  const RunResult result = run_pipeline(paced, config);
+  std::ifstream trajectory(out("pace_fast") / "trajectory.txt");
+  std::vector<double> stamps;
+  for (std::string line; std::getline(trajectory, line);)
+    if (!line.empty() && line[0] != '#') stamps.push_back(std::stod(line));
+  ASSERT_EQ(stamps.size(), 20u);
+  const double span_s = stamps.back() - stamps.front();
+  std::printf("recorded span %.3f s, realtime run %.3f s\n", span_s, result.wall_s);
+  EXPECT_GT(span_s, 0.3) << "20 frames of the synthetic recording (30 Hz)";
+  EXPECT_GE(result.wall_s, span_s);
+  for (const char* f : {"trajectory.txt", "mesh.ply", "objects.json"})
+    EXPECT_TRUE(slurp(out("pace_fast") / f) == slurp(out("pace_realtime") / f)) << f << " differs";
+}
+
 // METHODS.md B1 in the pipeline: the temporal filter sits between segmentation and fusion.
 // Per pixel it removes flicker (tests/segmentation: wrong labels 0.218 -> 0.0002), at the cost
 // of coverage: under 20 % flicker it keeps about a third of the labels. In the map the TSDF's

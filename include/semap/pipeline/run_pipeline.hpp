@@ -36,6 +36,10 @@ struct RunOptions {
   size_t max_frames = 0;   ///< 0 = all
   bool evaluate = true;    ///< evaluation figures when ground truth exists
   bool show_progress = true;
+  /// Feed the frames at the pace they were recorded (their timestamps), as the sensor delivered
+  /// them: e.g. to watch a live view grow or to test online behaviour. Frames are never dropped;
+  /// one that arrives late is fed at once.
+  bool realtime = false;
   /// Polled between frames: when it returns true (e.g. after SIGINT), reading stops; the frames
   /// so far are mapped to the end (pose graph, refresh) and every output is written.
   std::function<bool()> stop_requested;
