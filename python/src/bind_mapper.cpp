@@ -114,6 +114,7 @@ class PyMapper {
     py::dict d;
     d["frames"] = s.frames, d["frames_fused"] = s.frames_fused, d["keyframes"] = s.keyframes;
     d["lost_frames"] = s.lost_frames, d["relocalisations"] = s.relocalisations, d["loop_edges"] = s.loop_edges;
+    d["local_edges"] = s.local_edges;
     d["optimisations"] = s.optimisations, d["segmented_frames"] = s.segmented_frames;
     d["segmentations_dropped"] = s.segmentations_dropped, d["segmentations_failed"] = s.segmentations_failed;
     d["segmentation_error"] = s.segmentation_error, d["object_frames"] = s.object_frames, d["objects"] = s.objects;

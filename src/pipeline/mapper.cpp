@@ -449,7 +449,7 @@ void Mapper::Impl::refresh_map(const Trajectory& optimised) {
     max_displacement = std::max(max_displacement, surface_displacement_m(online, T_world_camera[k], config.tsdf.max_depth));
   }
   final_stats.max_pose_correction_m = max_displacement;
-  if (final_stats.loop_edges == 0) return;
+  if (final_stats.loop_edges + final_stats.local_edges == 0) return;  // an odometry chain alone moves no pose
   {
     std::lock_guard lock(objects_mutex);
     objects.apply_pose_corrections(corrections);  // object points move with their frame
@@ -527,6 +527,7 @@ void Mapper::finish() {
       std::lock_guard lock(m.tracker_mutex);
       optimised = m.tracker->finish();
       m.final_stats.loop_edges = m.tracker->stats().loop_edges;
+      m.final_stats.local_edges = m.tracker->stats().local_edges;
       m.final_stats.held_frames = m.tracker->stats().held_frames;
     }
     m.timings.add("pose_graph_final", t0);
@@ -601,6 +602,7 @@ MapperStats Mapper::stats() const {
     s.lost_frames = t.lost_frames;
     s.relocalisations = t.relocalisations;
     s.loop_edges = t.loop_edges;
+    s.local_edges = t.local_edges;
     s.optimisations = t.optimisations;
     s.resumed_keyframes = t.resumed_keyframes;
     s.held_frames = t.held_frames;

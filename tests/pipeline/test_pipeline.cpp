@@ -210,5 +210,33 @@ TEST(PipelineRefresh, RepairArchiveGivesTheSameMapAsRepairingAgain) {
     EXPECT_TRUE(slurp(dir / "cache_0" / f) == slurp(dir / "cache_256" / f)) << f << " differs";  // no byte diff
 }
 
+// Local keyframe edges alone (no loop candidates) change the optimised poses: the map is
+// refreshed with them, as after a loop closure (an odometry chain alone moves no pose).
+TEST(PipelineRefresh, LocalEdgesAloneRefreshTheMap) {
+  SEMAP_REQUIRE_DATA(tum, "tum_fr1_rpy");
+  Progress::set_mode(-1);
+  test::TempDir dir("semap_refresh_local");
+  SemapConfig config;
+  config.pipeline.threads = 1;
+  config.tsdf.voxel_size = 0.01;
+  config.tracking.loop_candidates = 0;
+  config.tracking.local_edge_keyframes = 3;
+  RunOptions o;
+  o.dataset = tum;
+  o.out_dir = dir / "out";
+  o.segmenter = "none";
+  o.max_frames = 100;
+  o.evaluate = false;
+  o.show_progress = false;
+  const RunResult result = run_pipeline(o, config);
+  std::printf("local edges %zu, loop edges %zu, largest surface correction %.4f m, refreshed %d\n",
+              result.mapper.local_edges, result.mapper.loop_edges, result.mapper.max_pose_correction_m,
+              result.mapper.map_refreshed);
+  EXPECT_EQ(result.mapper.loop_edges, 0u);
+  ASSERT_GT(result.mapper.local_edges, 0u);
+  EXPECT_GT(result.mapper.max_pose_correction_m, 0.25 * config.tsdf.voxel_size);
+  EXPECT_TRUE(result.mapper.map_refreshed);
+}
+
 }  // namespace
 }  // namespace semap
