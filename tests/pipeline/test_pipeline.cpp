@@ -45,6 +45,19 @@ class PipelineTest : public ::testing::Test {
   }
   static std::filesystem::path data() { return dir_->path() / "data"; }
   static std::filesystem::path out(const std::string& name) { return dir_->path() / name; }
+  /// Two short runs of the same frames, one thread, coarse voxels: compared byte for byte.
+  static std::pair<RunOptions, RunOptions> twin_runs(const std::string& a, const std::string& b, size_t frames) {
+    std::pair<RunOptions, RunOptions> runs{gt_options(a), gt_options(b)};
+    runs.first.max_frames = runs.second.max_frames = frames;
+    runs.first.evaluate = runs.second.evaluate = false;
+    return runs;
+  }
+  static SemapConfig one_thread_config() {
+    SemapConfig config;
+    config.pipeline.threads = 1;
+    config.tsdf.voxel_size = 0.04;
+    return config;
+  }
 
   static RunOptions gt_options(const std::string& name) {
     RunOptions o;
@@ -78,12 +91,8 @@ TEST_F(PipelineTest, GroundTruthRunWritesEveryOutputAndMeetsSemanticFigures) {
 }
 
 TEST_F(PipelineTest, OneThreadRunsAreByteIdentical) {
-  SemapConfig config;
-  config.pipeline.threads = 1;
-  config.tsdf.voxel_size = 0.04;
-  RunOptions a = gt_options("det_a"), b = gt_options("det_b");
-  a.max_frames = b.max_frames = 30;
-  a.evaluate = b.evaluate = false;
+  const SemapConfig config = one_thread_config();
+  const auto [a, b] = twin_runs("det_a", "det_b", 30);
   run_pipeline(a, config);
   run_pipeline(b, config);
   for (const char* f : {"trajectory.txt", "mesh.ply", "objects.json", "map.semap"})
@@ -93,12 +102,8 @@ TEST_F(PipelineTest, OneThreadRunsAreByteIdentical) {
 // RunOptions::realtime: the frames are fed at their recorded pace, so the run takes at least
 // the recorded span; the pace changes when frames arrive, never what is made of them.
 TEST_F(PipelineTest, RealtimeRunTakesTheRecordedSpanAndGivesTheSameMap) {
-  SemapConfig config;
-  config.pipeline.threads = 1;
-  config.tsdf.voxel_size = 0.04;
-  RunOptions fast = gt_options("pace_fast"), paced = gt_options("pace_realtime");
-  fast.max_frames = paced.max_frames = 20;
-  fast.evaluate = paced.evaluate = false;
+  const SemapConfig config = one_thread_config();
+  auto [fast, paced] = twin_runs("pace_fast", "pace_realtime", 20);
   paced.realtime = true;
   run_pipeline(fast, config);
   const RunResult result = run_pipeline(paced, config);
