@@ -16,8 +16,13 @@ COMMON=(-G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEB
 SUPP="$PWD/scripts/sanitizer"
 
 fail_on_reports() {  # $1: a log file
-  if grep -nE "ERROR: (Address|Leak|Thread)Sanitizer|WARNING: ThreadSanitizer|runtime error:" "$1" | head -n 20; then
-    echo "semap sanitize: sanitizer reports in $1"; return 1
+  # The count first: under pipefail, `grep | head` in the condition is false when head exits
+  # before grep has written every match (SIGPIPE), i.e. exactly when the reports are many.
+  local pattern="ERROR: (Address|Leak|Thread)Sanitizer|WARNING: ThreadSanitizer|runtime error:" reports
+  reports=$(grep -cE "$pattern" "$1" || true)
+  if [ "$reports" -gt 0 ]; then
+    grep -nE "$pattern" "$1" | sed -n 1,20p
+    echo "semap sanitize: $reports sanitizer reports in $1"; return 1
   fi
 }
 

@@ -22,7 +22,9 @@ cmake --build "$work/example" >/dev/null
 # The slice: links to the images, the first 40 lines of each list.
 mkdir "$work/slice"
 ln -s "$tum/rgb" "$tum/depth" "$work/slice/"
-for list in rgb.txt depth.txt; do grep -v '^#' "$tum/$list" | head -n 40 >"$work/slice/$list"; done
+# awk reads each list to its end: `grep | head` under pipefail fails when head exits before grep
+# has written everything (SIGPIPE), which depends on timing.
+for list in rgb.txt depth.txt; do awk '!/^#/ && n++ < 40' "$tum/$list" >"$work/slice/$list"; done
 cp "$tum/groundtruth.txt" "$work/slice/"
 
 "$work/example/cpp_mapper" "$work/slice" "$work/example_out" >/dev/null
