@@ -108,7 +108,9 @@ ImageHeader pnm_header(std::string_view text, const std::string& source) {
   const auto token = [&]() -> std::optional<uint64_t> {
     while (pos < text.size()) {
       if (std::isspace(static_cast<unsigned char>(text[pos]))) ++pos;
-      else if (text[pos] == '#') while (pos < text.size() && text[pos] != '\n') ++pos;
+      // A comment ends at '\n' or '\r', as in OpenCV's ReadNumber (fuzz_image found "# ..\r5\n"
+      // read as no width here where OpenCV decoded width 5).
+      else if (text[pos] == '#') while (pos < text.size() && text[pos] != '\n' && text[pos] != '\r') ++pos;
       else break;
     }
     uint64_t v = 0;

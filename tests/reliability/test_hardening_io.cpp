@@ -228,6 +228,13 @@ TEST(HardeningImages, EveryFormatsDeclaredSizeIsCheckedBeforeDecoding) {
   const auto pnm_header = io_detail::read_image_header(pnm, "odd.pgm");
   EXPECT_EQ(pnm_header.width, 2u);
   EXPECT_EQ(pnm_header.height, 1u);
+  // A comment ends at '\r' too, as in OpenCV's reader (fuzz_image: "#..\r5" is width 5).
+  const std::string cr_comment = std::string("P5\n#x\r5 3\n255\n") + std::string(15, '\x7f');
+  const auto cr_header = io_detail::read_image_header(cr_comment, "cr.pgm");
+  EXPECT_EQ(cr_header.width, 5u);
+  EXPECT_EQ(cr_header.height, 3u);
+  spit(tmp / "cr.pgm", cr_comment);
+  EXPECT_EQ(read_label_image(tmp / "cr.pgm").size(), cv::Size(5, 3));
 
   const long rss_before = max_rss_mb();
   for (const auto& bomb : image_bombs()) {
