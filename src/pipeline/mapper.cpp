@@ -526,9 +526,10 @@ void Mapper::finish() {
     {
       std::lock_guard lock(m.tracker_mutex);
       optimised = m.tracker->finish();
-      m.final_stats.loop_edges = m.tracker->stats().loop_edges;
-      m.final_stats.local_edges = m.tracker->stats().local_edges;
-      m.final_stats.held_frames = m.tracker->stats().held_frames;
+      const TrackerStats tracked = m.tracker->stats();
+      m.final_stats.loop_edges = tracked.loop_edges;
+      m.final_stats.local_edges = tracked.local_edges;
+      m.final_stats.held_frames = tracked.held_frames;
     }
     m.timings.add("pose_graph_final", t0);
     m.refresh_map(optimised);

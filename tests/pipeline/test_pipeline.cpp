@@ -10,6 +10,7 @@
 
 #include "semap/core/error.hpp"
 #include "core/progress.hpp"
+#include "semap/io/trajectory_io.hpp"
 #include "semap/pipeline/run_pipeline.hpp"
 #include "synth/synth_config.hpp"
 #include "test_support.hpp"
@@ -107,12 +108,9 @@ TEST_F(PipelineTest, RealtimeRunTakesTheRecordedSpanAndGivesTheSameMap) {
   paced.realtime = true;
   run_pipeline(fast, config);
   const RunResult result = run_pipeline(paced, config);
-  std::ifstream trajectory(out("pace_fast") / "trajectory.txt");
-  std::vector<double> stamps;
-  for (std::string line; std::getline(trajectory, line);)
-    if (!line.empty() && line[0] != '#') stamps.push_back(std::stod(line));
-  ASSERT_EQ(stamps.size(), 20u);
-  const double span_s = stamps.back() - stamps.front();
+  const Trajectory recorded = read_tum_trajectory(out("pace_fast") / "trajectory.txt");
+  ASSERT_EQ(recorded.size(), 20u);
+  const double span_s = recorded.back().timestamp - recorded.front().timestamp;
   std::printf("recorded span %.3f s, realtime run %.3f s\n", span_s, result.wall_s);
   EXPECT_GT(span_s, 0.3) << "20 frames of the synthetic recording (30 Hz)";
   EXPECT_GE(result.wall_s, span_s);
@@ -183,6 +181,18 @@ TEST_F(PipelineTest, CliRunAndConfigErrors) {
   EXPECT_FALSE(std::filesystem::exists(out("cli") / "mesh.ply"));
 }
 
+/// The first 100 frames of TUM fr1_rpy, tracked, no segmenter, no evaluation: the refresh tests.
+RunOptions tum_100_frames(const std::filesystem::path& tum, const std::filesystem::path& out_dir) {
+  RunOptions o;
+  o.dataset = tum;
+  o.out_dir = out_dir;
+  o.segmenter = "none";
+  o.max_frames = 100;
+  o.evaluate = false;
+  o.show_progress = false;
+  return o;
+}
+
 // The final map refresh rebuilds frames from their depth image plus the archived repair
 // fills instead of decoding colour and repairing again: the map must be the same byte for byte.
 // TUM fr1_rpy's first 100 frames close loops, so the refresh runs.
@@ -195,14 +205,7 @@ TEST(PipelineRefresh, RepairArchiveGivesTheSameMapAsRepairingAgain) {
     config.pipeline.threads = 1;
     config.tracking.background_loop_closure = false;  // loop edges at the same frame in both runs
     config.pipeline.refresh_cache_mb = cache_mb;
-    RunOptions o;
-    o.dataset = tum;
-    o.out_dir = dir / ("cache_" + std::to_string(cache_mb));
-    o.segmenter = "none";
-    o.max_frames = 100;
-    o.evaluate = false;
-    o.show_progress = false;
-    return run_pipeline(o, config);
+    return run_pipeline(tum_100_frames(tum, dir / ("cache_" + std::to_string(cache_mb))), config);
   };
   const RunResult reread = run(0), archived = run(256);
   ASSERT_TRUE(archived.mapper.map_refreshed) << "no refresh: nothing compared";
@@ -226,14 +229,7 @@ TEST(PipelineRefresh, LocalEdgesAloneRefreshTheMap) {
   config.tsdf.voxel_size = 0.01;
   config.tracking.loop_candidates = 0;
   config.tracking.local_edge_keyframes = 3;
-  RunOptions o;
-  o.dataset = tum;
-  o.out_dir = dir / "out";
-  o.segmenter = "none";
-  o.max_frames = 100;
-  o.evaluate = false;
-  o.show_progress = false;
-  const RunResult result = run_pipeline(o, config);
+  const RunResult result = run_pipeline(tum_100_frames(tum, dir / "out"), config);
   std::printf("local edges %zu, loop edges %zu, largest surface correction %.4f m, refreshed %d\n",
               result.mapper.local_edges, result.mapper.loop_edges, result.mapper.max_pose_correction_m,
               result.mapper.map_refreshed);
