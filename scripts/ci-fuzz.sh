@@ -1,13 +1,13 @@
 #!/usr/bin/env bash
 # Issue 8: builds the libFuzzer targets of fuzz/ (clang, ASan + UBSan) into build-fuzz/, replays
 # the committed regression inputs (fuzz/regressions/TARGET/*), then runs every target for
-# SEMAP_FUZZ_SECONDS (default 45) from seeds written by the project's own writers. Fails on any
+# SEMAP_FUZZ_SECONDS (default 30) from seeds written by the project's own writers. Fails on any
 # crash, sanitizer report, leak, timeout (> 10 s per input) or out-of-memory (> 2 GiB); the
 # offending input is kept as build-fuzz/artifacts/TARGET-crash-*. Prints executions per target.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 JOBS=${SEMAP_JOBS:-$(nproc)}
-SECS=${SEMAP_FUZZ_SECONDS:-45}
+SECS=${SEMAP_FUZZ_SECONDS:-30}
 BUILD=${SEMAP_FUZZ_BUILD:-build-fuzz}
 
 start=$SECONDS
