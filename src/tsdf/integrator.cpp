@@ -310,6 +310,70 @@ struct RayCells {
   }
 };
 
+/// One image row's pixels in the world (structure of arrays) with their voxels and B6
+/// weights 1/z^2; w = 0 where a pixel has no group (unusable depth, voxel out of key range).
+struct RowPoints {
+  std::vector<float> x, y, z, w;
+  std::vector<int32_t> vx, vy, vz;
+  uint64_t key(int u) const { return pack_key(Eigen::Vector3i(vx[u], vy[u], vz[u])); }
+};
+
+/// floor(x) of a float within the int range, as floor_cells.
+inline int32_t floor_cell(float x) {
+  const int32_t t = static_cast<int32_t>(x);
+  return t - (x < static_cast<float>(t) ? 1 : 0);
+}
+
+/// What back-projecting one row needs: the world ray of pixel u is d(u) = col0 * (u - cx) / fx
+/// + ray0, its point t + z d(u).
+struct RowRays {
+  float r00, r10, r20;  ///< col0 = R_wc's first column
+  float q0, q1, q2;     ///< ray0 = R_wc (0, (v - cy) / fy, 1)
+  float tx, ty, tz, cx, inv_fx, inv_s, min_range, max_range;
+};
+
+/// The lanes of back_project_row, as restrict parameters (GCC ignores restrict on locals; its
+/// 25 alias checks between the seven outputs kept the loop scalar). Ints, not bools, and no
+/// short-circuit: the loop vectorises. Pixels without a group are computed at depth 0 (finite,
+/// in the int range) and masked by w = 0.
+void back_project_lanes(const RowRays& r, const float* __restrict depth, int W, float* __restrict ox, float* __restrict oy,
+                        float* __restrict oz, float* __restrict ow, int32_t* __restrict cx_out, int32_t* __restrict cy_out,
+                        int32_t* __restrict cz_out) {
+  constexpr float kCellLimit = 1.0e9f;  // keeps the float -> int casts defined
+  for (int u = 0; u < W; ++u) {
+    const float d = depth[u];
+    const int usable = (d > r.min_range) & (d <= r.max_range);  // 0 for NaN
+    const float z = usable ? d : 0.0f;
+    const float x_factor = (static_cast<float>(u) - r.cx) * r.inv_fx;
+    const float px = (r.r00 * x_factor + r.q0) * z + r.tx, py = (r.r10 * x_factor + r.q1) * z + r.ty,
+                pz = (r.r20 * x_factor + r.q2) * z + r.tz;
+    const int32_t ix = floor_cell(std::min(std::max(px * r.inv_s, -kCellLimit), kCellLimit));
+    const int32_t iy = floor_cell(std::min(std::max(py * r.inv_s, -kCellLimit), kCellLimit));
+    const int32_t iz = floor_cell(std::min(std::max(pz * r.inv_s, -kCellLimit), kCellLimit));
+    const uint32_t out_of_range =  // key_in_range, lane by lane
+        (static_cast<uint32_t>(ix + kKeyOffset) | static_cast<uint32_t>(iy + kKeyOffset) | static_cast<uint32_t>(iz + kKeyOffset)) >>
+        kKeyBits;
+    const float inv_z2 = 1.0f / std::max(z * z, 1.0e-12f);  // = 1/z^2 where used; finite at z = 0
+    ox[u] = px, oy[u] = py, oz[u] = pz;
+    cx_out[u] = ix, cy_out[u] = iy, cz_out[u] = iz;
+    ow[u] = (usable && out_of_range == 0) ? inv_z2 : 0.0f;
+  }
+}
+
+/// Back-projects row v of the depth image: each pixel's world point p = t_wc + z R_wc
+/// ((u - cx) / fx, (v - cy) / fy, 1), its voxel and B6 weight.
+void back_project_row(const FrameSetup& f, const float* depth, int v, RowPoints& out) {
+  const int W = f.width;
+  for (auto* a : {&out.x, &out.y, &out.z, &out.w}) a->resize(W);
+  for (auto* a : {&out.vx, &out.vy, &out.vz}) a->resize(W);
+  const float y_factor = (static_cast<float>(v) - f.cy) / f.fy;
+  const Eigen::Vector3f ray0 = f.R_wc.col(1) * y_factor + f.R_wc.col(2);
+  const RowRays rays{f.R_wc(0, 0), f.R_wc(1, 0), f.R_wc(2, 0), ray0.x(), ray0.y(), ray0.z(),
+                     f.t_wc.x(), f.t_wc.y(), f.t_wc.z(), f.cx, 1.0f / f.fx, 1.0f / f.s, f.min_range, f.max_range};
+  back_project_lanes(rays, depth, W, out.x.data(), out.y.data(), out.z.data(), out.w.data(), out.vx.data(), out.vy.data(),
+                     out.vz.data());
+}
+
 // =============================================================================================
 // Grouped ray casting (METHODS B5 + B6)
 // =============================================================================================
@@ -319,11 +383,11 @@ class GroupedIntegrator final : public ArenaIntegrator {
   std::string name() const override { return "grouped"; }
 
  private:
-  struct PixelPoint {
-    Eigen::Vector3f p;
-    float w;        // 1/z^2, 0 = invalid pixel
-    uint64_t key;
+  /// A pixel's group (in its strip's table, -1 = no group) and weight, kept only for the
+  /// per-pixel probabilities: writing every pixel's point was 10 MB a VGA frame.
+  struct PixelGroup {
     int32_t group;
+    float w;
   };
   struct LabelSlot {
     Eigen::Vector3f weighted_sum = Eigen::Vector3f::Zero();
@@ -331,6 +395,10 @@ class GroupedIntegrator final : public ArenaIntegrator {
     float rgb_sum[3] = {0, 0, 0};
     ClassId label = 0;
     int32_t next = -1;
+    void add(const LabelSlot& o) {
+      weight += o.weight, weighted_sum += o.weighted_sum, confidence_sum += o.confidence_sum;
+      for (int c = 0; c < 3; ++c) rgb_sum[c] += o.rgb_sum[c];
+    }
   };
   /// A LabelSlot's running sums, held in registers by the grouping loop.
   struct SlotSums {
@@ -350,6 +418,70 @@ class GroupedIntegrator final : public ArenaIntegrator {
     uint64_t key;
     int32_t first_slot;
     float total_weight;
+  };
+  /// Voxel groups with per-label sums (B5), found by voxel key: one table per strip of rows,
+  /// and the frame's, merged from them.
+  struct GroupTable {
+    std::vector<int32_t> table;  ///< open addressing, group ids, -1 = empty
+    std::vector<GroupHead> heads;
+    std::vector<LabelSlot> slots;
+    /// Empties it, the hash sized for at least `capacity` (a power of two >= 1024; not 2x
+    /// the pixels: a table that size was a 4 MB fill and a cache miss per probe).
+    void reset(size_t capacity) {
+      size_t n = 1024;
+      while (n < capacity) n *= 2;
+      table.assign(n, -1);
+      heads.clear();
+      slots.clear();
+    }
+    /// The group of voxel key `key`, a new one (the next id) when absent; doubles at half load.
+    int32_t find_or_add_group(uint64_t key) {
+      size_t mask = table.size() - 1;
+      for (size_t h = mix_key(key) & mask;; h = (h + 1) & mask) {
+        const int32_t g = table[h];
+        if (g >= 0 && heads[g].key == key) return g;
+        if (g >= 0) continue;
+        const int32_t added = static_cast<int32_t>(heads.size());
+        heads.push_back(GroupHead{key, -1, 0.0f});
+        if (2 * heads.size() <= table.size()) {
+          table[h] = added;
+          return added;
+        }
+        table.assign(2 * table.size(), -1);  // grow: re-insert every group, the new one too
+        mask = table.size() - 1;
+        for (size_t k = 0; k < heads.size(); ++k) {
+          size_t j = mix_key(heads[k].key) & mask;
+          while (table[j] >= 0) j = (j + 1) & mask;
+          table[j] = static_cast<int32_t>(k);
+        }
+        return added;
+      }
+    }
+    /// The slot of `label` in group g's list, a new one appended when absent.
+    int32_t find_or_add_slot(int32_t g, ClassId label) {
+      int32_t s = heads[g].first_slot, last = -1;
+      while (s >= 0 && slots[s].label != label) {
+        last = s;
+        s = slots[s].next;
+      }
+      if (s >= 0) return s;
+      s = static_cast<int32_t>(slots.size());
+      slots.emplace_back();
+      slots.back().label = label;
+      if (last < 0) heads[g].first_slot = s;
+      else slots[last].next = s;
+      return s;
+    }
+  };
+  /// Rows [v0, v1) of the frame, grouped on their own (in parallel with the other strips).
+  /// The strips are fixed by the image, not by the thread count: the map does not depend on it.
+  static constexpr int kStripRows = 64;
+  struct Strip {
+    int v0 = 0, v1 = 0;
+    size_t valid_pixels = 0;
+    GroupTable groups;
+    std::vector<int32_t> frame_group;  ///< per strip group, its id in the frame's table
+    RowPoints row;                     ///< the row being grouped
   };
   /// The rest, filled after grouping (same index).
   struct Group {
@@ -390,106 +522,19 @@ class GroupedIntegrator final : public ArenaIntegrator {
   };
 
   void run(TsdfMap& map, const IntegrationInput& in, const FrameSetup& f) override {
-    const int W = f.width, H = f.height;
-    const size_t n_pixels = static_cast<size_t>(W) * H;
-    points_.resize(n_pixels);
-    const float inv_s = 1.0f / f.s;
-    // 1. Back-project every pixel (parallel, per row).
-    tbb::parallel_for(tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& rows) {
-      for (int v = rows.begin(); v < rows.end(); ++v) {
-        const float* depth = in.depth.ptr<float>(v);
-        for (int u = 0; u < W; ++u) {
-          PixelPoint& pp = points_[static_cast<size_t>(v) * W + u];
-          const float z = depth[u];
-          pp.w = 0;
-          pp.group = -1;
-          if (!usable_depth(z, f.min_range, f.max_range)) continue;
-          const Eigen::Vector3f pc((u - f.cx) * z / f.fx, (v - f.cy) * z / f.fy, z);
-          pp.p = f.R_wc * pc + f.t_wc;
-          const Eigen::Vector3i vox = floor_cells(pp.p * inv_s);
-          if (!key_in_range(vox)) continue;
-          pp.key = pack_key(vox);
-          pp.w = 1.0f / (z * z);  // B6 point weight
-        }
-      }
-    });
-    // 2. Group by voxel (serial, pixel order: deterministic). METHODS B5.
-    // The group table is sized for ~4x the previous frame's groups (not 2x the pixels: a table
-    // that size was a 4 MB fill and a cache miss per probe) and doubles at half load. Group ids
-    // follow pixel order whatever the table size.
-    size_t capacity = 1024;
-    while (capacity < 4 * heads_.size()) capacity *= 2;
-    table_.assign(capacity, -1);
-    heads_.clear();
-    slots_.clear();
-    // The current group's weight and label slot's sums are held in registers while consecutive
-    // pixels add to them (written back when the pixel's voxel or label changes): the same
-    // additions in the same order as into memory, without a store-forwarded load on each chain.
-    uint64_t last_key = ~0ULL;
-    int32_t g = -1, s = -1;
-    ClassId last_label = 0;
-    float group_weight = 0;
-    SlotSums sums;
-    const uint8_t* labels = f.labels ? in.labels.ptr<uint8_t>(0) : nullptr;
-    const float* confidence = f.confidence ? in.confidence.ptr<float>(0) : nullptr;
-    const uint8_t* colour = f.colour ? in.colour.ptr<uint8_t>(0) : nullptr;
-    for (size_t i = 0; i < n_pixels; ++i) {
-      PixelPoint& pp = points_[i];
-      if (pp.w == 0) continue;
-      ++stats_.valid_pixels;
-      const ClassId label = labels ? labels[i] : 0;
-      const bool same_group = pp.key == last_key;  // neighbouring pixels mostly fall into the same voxel
-      if (!same_group || label != last_label) {
-        if (s >= 0) sums.store(slots_[s]);
-        if (!same_group) {
-          if (g >= 0) heads_[g].total_weight = group_weight;
-          g = find_or_add_group(pp.key);
-          last_key = pp.key;
-          group_weight = heads_[g].total_weight;
-        }
-        s = find_or_add_slot(heads_[g], label);
-        sums.load(slots_[s]);
-        last_label = label;
-      }
-      pp.group = g;
-      const float w = pp.w;
-      group_weight += w;
-      sums.weight += w;
-      sums.x += w * pp.p.x(), sums.y += w * pp.p.y(), sums.z += w * pp.p.z();
-      if (confidence) sums.confidence += w * confidence[i];
-      if (colour) {
-        const uint8_t* bgr = colour + 3 * i;
-        sums.r += w * bgr[2], sums.g += w * bgr[1], sums.b += w * bgr[0];
-      }
-    }
-    if (s >= 0) sums.store(slots_[s]);
-    if (g >= 0) heads_[g].total_weight = group_weight;
-    stats_.rays = heads_.size();
+    // 1-2. Back-project and group by voxel, per strip of rows (parallel), then merge (serial).
+    group_pixels(in, f);
     // 3. Each group's label = argmax W_l, its point = weighted mean of the points with that label.
     const bool want_observation = map.has_bayes_layer() && f.labels;
+    const std::vector<GroupHead>& heads = frame_.heads;
     // Reused from the last frame: every field read later is written below (an observation only
     // where it is read: labelled groups with the Bayes layer).
-    groups_.resize(heads_.size());
-    for (size_t k = 0; k < heads_.size(); ++k) {
-      Group& g = groups_[k];
-      const LabelSlot* best = nullptr;
-      for (int32_t s = heads_[k].first_slot; s >= 0; s = slots_[s].next) {
-        const LabelSlot& slot = slots_[s];
-        if (!best || slot.weight > best->weight || (slot.weight == best->weight && slot.label < best->label)) best = &slot;
-      }
-      g.label = best->label;
-      g.point = best->weighted_sum / best->weight;
-      g.colour = Rgb8{static_cast<uint8_t>(std::lround(best->rgb_sum[0] / best->weight)),
-                      static_cast<uint8_t>(std::lround(best->rgb_sum[1] / best->weight)),
-                      static_cast<uint8_t>(std::lround(best->rgb_sum[2] / best->weight))};
-      if (want_observation && g.label != 0 && !f.probabilities) {
-        const float c = f.confidence ? std::clamp(best->confidence_sum / best->weight, 0.01f, 0.999f) : f.default_confidence;
-        g.observation = ClassDistribution::from_label(g.label, c, f.confusion_classes);
-      }
-    }
+    groups_.resize(heads.size());
+    ray_info_.resize(heads.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, heads.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t k = r.begin(); k < r.end(); ++k) summarise_group(f, want_observation, k);
+    });
     if (want_observation && f.probabilities) group_probabilities(in, f, map.bayes().k());
-    ray_info_.resize(groups_.size());
-    for (size_t g = 0; g < groups_.size(); ++g) ray_info_[g] = RayInfo{heads_[g].total_weight, groups_[g].colour, groups_[g].label};
     // 4. Cast one ray per group through the truncation band (parallel in fixed chunks).
     constexpr size_t kChunk = 512;
     const size_t n_chunks = (groups_.size() + kChunk - 1) / kChunk;
@@ -579,44 +624,110 @@ class GroupedIntegrator final : public ArenaIntegrator {
     stats_.allocated_blocks = touched.allocated;
   }
 
-  /// The slot of `label` in `group`'s list, a new one appended when absent.
-  int32_t find_or_add_slot(GroupHead& group, ClassId label) {
-    int32_t s = group.first_slot, last = -1;
-    while (s >= 0 && slots_[s].label != label) {
-      last = s;
-      s = slots_[s].next;
-    }
-    if (s >= 0) return s;
-    s = static_cast<int32_t>(slots_.size());
-    slots_.emplace_back();
-    slots_.back().label = label;
-    if (last < 0) group.first_slot = s;
-    else slots_[last].next = s;
-    return s;
+  /// Back-projects and groups the pixels of every strip (parallel), then merges the strips.
+  void group_pixels(const IntegrationInput& in, const FrameSetup& f) {
+    const int n_strips = (f.height + kStripRows - 1) / kStripRows;
+    if (f.probabilities) pixel_groups_.assign(static_cast<size_t>(f.width) * f.height, PixelGroup{-1, 0.0f});
+    strips_.resize(n_strips);
+    tbb::parallel_for(0, n_strips, [&](int k) {
+      group_strip(in, f, k * kStripRows, std::min(f.height, (k + 1) * kStripRows), strips_[k]);
+    });
+    merge_strips();
+    for (const Strip& strip : strips_) stats_.valid_pixels += strip.valid_pixels;
+    stats_.rays = frame_.heads.size();
   }
 
-  /// The group of voxel key `key`, a new one (the next id) when absent (B5 grouping).
-  int32_t find_or_add_group(uint64_t key) {
-    size_t mask = table_.size() - 1;
-    for (size_t h = mix_key(key) & mask;; h = (h + 1) & mask) {
-      const int32_t g = table_[h];
-      if (g >= 0 && heads_[g].key == key) return g;
-      if (g >= 0) continue;
-      const int32_t added = static_cast<int32_t>(heads_.size());
-      heads_.push_back(GroupHead{key, -1, 0.0f});
-      if (2 * heads_.size() <= table_.size()) {
-        table_[h] = added;
-        return added;
+  /// Rows [v0, v1): each row back-projected, then its pixels grouped by voxel in pixel order
+  /// (B5). The current group's weight and label slot's sums are held in registers while
+  /// consecutive pixels add to them (written back when the pixel's voxel or label changes): the
+  /// same additions in the same order as into memory, without a store-forwarded load on each chain.
+  void group_strip(const IntegrationInput& in, const FrameSetup& f, int v0, int v1, Strip& strip) {
+    GroupTable& t = strip.groups;
+    t.reset(4 * t.heads.size());
+    strip.v0 = v0, strip.v1 = v1, strip.valid_pixels = 0;
+    RowPoints& row = strip.row;
+    uint64_t last_key = ~0ULL;
+    int32_t g = -1, s = -1;
+    ClassId last_label = 0;
+    float group_weight = 0;
+    SlotSums sums;
+    for (int v = v0; v < v1; ++v) {
+      back_project_row(f, in.depth.ptr<float>(v), v, row);
+      const uint8_t* labels = f.labels ? in.labels.ptr<uint8_t>(v) : nullptr;
+      const float* confidence = f.confidence ? in.confidence.ptr<float>(v) : nullptr;
+      const uint8_t* colour = f.colour ? in.colour.ptr<uint8_t>(v) : nullptr;
+      for (int u = 0; u < f.width; ++u) {
+        const float w = row.w[u];
+        if (w == 0) continue;
+        ++strip.valid_pixels;
+        const ClassId label = labels ? labels[u] : 0;
+        const uint64_t key = row.key(u);
+        const bool same_group = key == last_key;  // neighbouring pixels mostly fall into the same voxel
+        if (!same_group || label != last_label) {
+          if (s >= 0) sums.store(t.slots[s]);
+          if (!same_group) {
+            if (g >= 0) t.heads[g].total_weight = group_weight;
+            g = t.find_or_add_group(key);
+            last_key = key;
+            group_weight = t.heads[g].total_weight;
+          }
+          s = t.find_or_add_slot(g, label);
+          sums.load(t.slots[s]);
+          last_label = label;
+        }
+        if (f.probabilities) pixel_groups_[static_cast<size_t>(v) * f.width + u] = PixelGroup{g, w};
+        group_weight += w;
+        sums.weight += w;
+        sums.x += w * row.x[u], sums.y += w * row.y[u], sums.z += w * row.z[u];
+        if (confidence) sums.confidence += w * confidence[u];
+        if (colour) {
+          const uint8_t* bgr = colour + 3 * u;
+          sums.r += w * bgr[2], sums.g += w * bgr[1], sums.b += w * bgr[0];
+        }
       }
-      table_.assign(2 * table_.size(), -1);  // grow: re-insert every group, the new one too
-      mask = table_.size() - 1;
-      for (size_t k = 0; k < heads_.size(); ++k) {
-        size_t j = mix_key(heads_[k].key) & mask;
-        while (table_[j] >= 0) j = (j + 1) & mask;
-        table_[j] = static_cast<int32_t>(k);
-      }
-      return added;
     }
+    if (s >= 0) sums.store(t.slots[s]);
+    if (g >= 0) t.heads[g].total_weight = group_weight;
+  }
+
+  /// The strips' groups into the frame's, strip after strip: group ids follow the first
+  /// appearance in pixel order, as one serial pass gives; a group's sums add per strip.
+  void merge_strips() {
+    size_t strip_groups = 0;
+    for (const Strip& strip : strips_) strip_groups += strip.groups.heads.size();
+    frame_.reset(2 * strip_groups);  // at most half full: it never grows
+    for (Strip& strip : strips_) {
+      const GroupTable& t = strip.groups;
+      strip.frame_group.resize(t.heads.size());
+      for (size_t k = 0; k < t.heads.size(); ++k) {
+        const int32_t g = frame_.find_or_add_group(t.heads[k].key);
+        strip.frame_group[k] = g;
+        frame_.heads[g].total_weight += t.heads[k].total_weight;
+        for (int32_t s = t.heads[k].first_slot; s >= 0; s = t.slots[s].next)
+          frame_.slots[frame_.find_or_add_slot(g, t.slots[s].label)].add(t.slots[s]);
+      }
+    }
+  }
+
+  /// Group k's label = argmax W_l, its point = the weighted mean of the points with that label
+  /// (B5), colour and observation likewise; and what its ray's voxel updates read.
+  void summarise_group(const FrameSetup& f, bool want_observation, size_t k) {
+    Group& g = groups_[k];
+    const LabelSlot* best = nullptr;
+    for (int32_t s = frame_.heads[k].first_slot; s >= 0; s = frame_.slots[s].next) {
+      const LabelSlot& slot = frame_.slots[s];
+      if (!best || slot.weight > best->weight || (slot.weight == best->weight && slot.label < best->label)) best = &slot;
+    }
+    g.label = best->label;
+    g.point = best->weighted_sum / best->weight;
+    g.colour = Rgb8{static_cast<uint8_t>(std::lround(best->rgb_sum[0] / best->weight)),
+                    static_cast<uint8_t>(std::lround(best->rgb_sum[1] / best->weight)),
+                    static_cast<uint8_t>(std::lround(best->rgb_sum[2] / best->weight))};
+    if (want_observation && g.label != 0 && !f.probabilities) {
+      const float c = f.confidence ? std::clamp(best->confidence_sum / best->weight, 0.01f, 0.999f) : f.default_confidence;
+      g.observation = ClassDistribution::from_label(g.label, c, f.confusion_classes);
+    }
+    ray_info_[k] = RayInfo{frame_.heads[k].total_weight, g.colour, g.label};
   }
 
   /// B6 for the updates of block k in ray order, then one label observation per voxel, from the
@@ -654,25 +765,27 @@ class GroupedIntegrator final : public ArenaIntegrator {
   void group_probabilities(const IntegrationInput& in, const FrameSetup& f, int k) {
     const int nc = f.prob_channels;
     std::vector<float> sums(groups_.size() * nc, 0.0f);
-    const size_t n = points_.size();
-    for (size_t i = 0; i < n; ++i) {
-      const PixelPoint& pp = points_[i];
-      if (pp.group < 0) continue;
-      const ClassId label = in.labels.ptr<uint8_t>(0)[i];
-      if (label != groups_[pp.group].label) continue;
-      const float* probs = in.probabilities.ptr<float>(0) + i * nc;
-      float* sum = &sums[static_cast<size_t>(pp.group) * nc];
-      for (int c = 0; c < nc; ++c) sum[c] += pp.w * probs[c];
+    for (const Strip& strip : strips_) {  // pixel order
+      const size_t end = static_cast<size_t>(strip.v1) * f.width;
+      for (size_t i = static_cast<size_t>(strip.v0) * f.width; i < end; ++i) {
+        const PixelGroup& pp = pixel_groups_[i];
+        if (pp.group < 0) continue;
+        const int32_t g = strip.frame_group[pp.group];
+        const ClassId label = in.labels.ptr<uint8_t>(0)[i];
+        if (label != groups_[g].label) continue;
+        const float* probs = in.probabilities.ptr<float>(0) + i * nc;
+        float* sum = &sums[static_cast<size_t>(g) * nc];
+        for (int c = 0; c < nc; ++c) sum[c] += pp.w * probs[c];
+      }
     }
     for (size_t g = 0; g < groups_.size(); ++g)
       if (groups_[g].label != 0) groups_[g].observation = ClassDistribution::from_probabilities(&sums[g * nc], nc, k);
   }
 
-  std::vector<PixelPoint> points_;
-  std::vector<int32_t> table_;
-  std::vector<GroupHead> heads_;
+  std::vector<PixelGroup> pixel_groups_;  ///< only with per-pixel probabilities
+  std::vector<Strip> strips_;
+  GroupTable frame_;
   std::vector<Group> groups_;
-  std::vector<LabelSlot> slots_;
   std::vector<std::vector<BlockUpdate>> chunk_updates_;
   std::vector<std::vector<BlockRun>> chunk_runs_;
   std::vector<std::vector<size_t>> chunk_cursors_;  ///< per chunk, per touched block

@@ -122,6 +122,32 @@ TEST_P(BothIntegrators, DeterministicAcrossRunsAndThreadCounts) {
   EXPECT_TRUE(a.map() == c.map());
 }
 
+// Per-pixel class probabilities (a semantic network's softmax) reach the Bayes layer: 0.7 on
+// the rendered label, the rest spread over the other classes. The grouped integrator sums them
+// per group across its strips of rows; a group mixed up there would mislabel its surface.
+TEST_P(BothIntegrators, PerPixelProbabilitiesFuseIntoTheBayesLayer) {
+  auto fuse_probabilities = [](int threads) {
+    SemanticTsdf tsdf(config_for(GetParam(), threads));
+    for (IntegrationInput in : rendered_scene().frames) {
+      in.probabilities = cv::Mat(in.depth.size(), CV_32FC(kNumClasses));
+      for (int v = 0; v < in.depth.rows; ++v)
+        for (int u = 0; u < in.depth.cols; ++u) {
+          float* p = in.probabilities.ptr<float>(v) + static_cast<size_t>(u) * kNumClasses;
+          std::fill(p, p + kNumClasses, 0.3f / (kNumClasses - 1));
+          p[in.labels.at<uint8_t>(v, u)] = 0.7f;
+        }
+      tsdf.integrate(in);
+    }
+    return tsdf;
+  };
+  SemanticTsdf one = fuse_probabilities(1), two = fuse_probabilities(2);
+  EXPECT_TRUE(one.map() == two.map());
+  const MeshQuality q = measure(two.extract_mesh());
+  std::cout << GetParam() << ": labels " << q.label_accuracy << " labelled " << q.labelled_fraction << "\n";
+  EXPECT_GT(q.label_accuracy, 0.97);
+  EXPECT_GT(q.labelled_fraction, 0.85);
+}
+
 TEST_P(BothIntegrators, IncrementalMeshEqualsFullRemesh) {
   TsdfConfig cfg = config_for(GetParam());
   SemanticTsdf tsdf(cfg);
