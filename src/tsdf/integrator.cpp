@@ -18,6 +18,7 @@
 #include <array>
 #include <cmath>
 #include <cstdlib>
+#include <span>
 #include <utility>
 
 #include "core/cpu_time.hpp"
@@ -503,6 +504,11 @@ class GroupedIntegrator final : public ArenaIntegrator {
     int32_t group;
     uint16_t li;
   };
+  /// A run of one block's updates where step 4 wrote them.
+  struct RunRef {
+    const BlockUpdate* first;
+    size_t count;
+  };
   /// What a voxel update reads of its ray (group), 8 bytes: the apply loop's reads of the
   /// 100-byte groups were its cache misses.
   struct RayInfo {
@@ -513,8 +519,8 @@ class GroupedIntegrator final : public ArenaIntegrator {
   /// What the per-block apply step of one frame reads.
   struct ApplyPass {
     const VoxelUpdater& updater;
-    const BlockUpdate* updates;
-    const size_t* offsets;
+    const RunRef* runs;
+    const size_t* offsets;  ///< block k's runs: [offsets[k], offsets[k + 1])
     const RayInfo* rays;
     const Group* groups;
     float label_band;
@@ -570,41 +576,21 @@ class GroupedIntegrator final : public ArenaIntegrator {
         }
       }
     });
-    // 5. Bucket the updates by block, stable (each block's updates in ray order): the blocks
-    // are touched per run in ray order (serial), each chunk's updates then go to its own
-    // cursors, which start after the earlier chunks' updates of the block (parallel).
+    // 5. Touch the blocks per run in ray order, then bucket the runs by block, stable (a
+    // counting sort; each block's runs in ray order). The updates stay where step 4 wrote them.
     TouchedBlocks touched;
     touched.stamp = map.next_frame_stamp();
-    size_t n_updates = 0;
-    for (const auto& v : chunk_updates_) n_updates += v.size();
-    for (auto& runs : chunk_runs_)
-      for (BlockRun& run : runs) run.slot = touched.touch(map, run.block);
-    const size_t n_blocks = touched.blocks.size();
-    chunk_cursors_.resize(n_chunks);
-    tbb::parallel_for(size_t{0}, n_chunks, [&](size_t c) {
-      chunk_cursors_[c].assign(n_blocks, 0);  // first: the chunk's update count per block
-      for (const BlockRun& run : chunk_runs_[c]) chunk_cursors_[c][run.slot] += run.count;
-    });
-    offsets_.assign(n_blocks + 1, 0);
-    for (size_t k = 0; k < n_blocks; ++k) {
-      size_t at = offsets_[k];
-      for (size_t c = 0; c < n_chunks; ++c) at += std::exchange(chunk_cursors_[c][k], at);
-      offsets_[k + 1] = at;
+    size_t n_updates = 0, n_runs = 0;
+    for (auto& runs : chunk_runs_) {
+      n_runs += runs.size();
+      for (BlockRun& run : runs) run.slot = touched.touch(map, run.block), n_updates += run.count;
     }
-    sorted_.resize(n_updates);
-    tbb::parallel_for(size_t{0}, n_chunks, [&](size_t c) {
-      const BlockUpdate* u = chunk_updates_[c].data();
-      for (const BlockRun& run : chunk_runs_[c]) {
-        size_t& cursor = chunk_cursors_[c][run.slot];
-        std::copy(u, u + run.count, sorted_.begin() + static_cast<std::ptrdiff_t>(cursor));
-        u += run.count;
-        cursor += run.count;
-      }
-    });
+    const size_t n_blocks = touched.blocks.size();
+    bucket_runs(n_blocks, n_runs);
     // 6. Apply per block in parallel (each block's updates in ray order: deterministic).
     const VoxelUpdater updater = make_updater(map, f);
     const ApplyPass pass{updater,
-                         sorted_.data(),
+                         block_runs_.data(),
                          offsets_.data(),
                          ray_info_.data(),
                          groups_.data(),
@@ -622,6 +608,24 @@ class GroupedIntegrator final : public ArenaIntegrator {
     stats_.voxel_updates = n_updates;
     stats_.touched_blocks = n_blocks;
     stats_.allocated_blocks = touched.allocated;
+  }
+
+  /// block_runs_: the runs of every chunk by block slot, each block's in ray order (stable
+  /// counting sort), block k's at [offsets_[k], offsets_[k + 1]).
+  void bucket_runs(size_t n_blocks, size_t n_runs) {
+    offsets_.assign(n_blocks + 1, 0);
+    for (const auto& runs : chunk_runs_)
+      for (const BlockRun& run : runs) ++offsets_[run.slot + 1];
+    for (size_t k = 0; k < n_blocks; ++k) offsets_[k + 1] += offsets_[k];
+    cursors_.assign(offsets_.begin(), offsets_.end() - 1);
+    block_runs_.resize(n_runs);
+    for (size_t c = 0; c < chunk_runs_.size(); ++c) {
+      const BlockUpdate* u = chunk_updates_[c].data();
+      for (const BlockRun& run : chunk_runs_[c]) {
+        block_runs_[cursors_[run.slot]++] = RunRef{u, run.count};
+        u += run.count;
+      }
+    }
   }
 
   /// Back-projects and groups the pixels of every strip (parallel), then merges the strips.
@@ -737,14 +741,15 @@ class GroupedIntegrator final : public ArenaIntegrator {
     std::array<float, kBlockVoxels> best_d;
     std::array<int32_t, kBlockVoxels> best_group;
     if (p.labels) best_group.fill(-1);
-    for (size_t j = p.offsets[k]; j < p.offsets[k + 1]; ++j) {
-      const BlockUpdate& u = p.updates[j];
-      const RayInfo& ray = p.rays[u.group];
-      const int li = u.li;
-      if (!p.updater.update<kNativeHalf>(block, li, u.d, ray.weight, 0, nullptr, p.colour ? &ray.colour : nullptr)) continue;
-      if (p.labels && ray.label != 0 && std::fabs(u.d) <= p.label_band && (best_group[li] < 0 || std::fabs(u.d) < best_d[li])) {
-        best_group[li] = u.group;
-        best_d[li] = std::fabs(u.d);
+    for (size_t r = p.offsets[k]; r < p.offsets[k + 1]; ++r) {
+      for (const BlockUpdate& u : std::span(p.runs[r].first, p.runs[r].count)) {
+        const RayInfo& ray = p.rays[u.group];
+        const int li = u.li;
+        if (!p.updater.update<kNativeHalf>(block, li, u.d, ray.weight, 0, nullptr, p.colour ? &ray.colour : nullptr)) continue;
+        if (p.labels && ray.label != 0 && std::fabs(u.d) <= p.label_band && (best_group[li] < 0 || std::fabs(u.d) < best_d[li])) {
+          best_group[li] = u.group;
+          best_d[li] = std::fabs(u.d);
+        }
       }
     }
     if (p.labels)
@@ -788,9 +793,8 @@ class GroupedIntegrator final : public ArenaIntegrator {
   std::vector<Group> groups_;
   std::vector<std::vector<BlockUpdate>> chunk_updates_;
   std::vector<std::vector<BlockRun>> chunk_runs_;
-  std::vector<std::vector<size_t>> chunk_cursors_;  ///< per chunk, per touched block
-  std::vector<size_t> offsets_;
-  std::vector<BlockUpdate> sorted_;
+  std::vector<size_t> offsets_, cursors_;
+  std::vector<RunRef> block_runs_;
   std::vector<RayInfo> ray_info_;
 };
 
