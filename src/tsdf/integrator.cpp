@@ -152,16 +152,13 @@ bool have_avx2_f16c() {
 
 int arena_threads(const TsdfConfig& cfg) { return cfg.threads > 0 ? cfg.threads : tbb::info::default_concurrency(); }
 
-/// floor(p) per axis as cell indices: the truncating cast, one lower for negative non-integers.
-/// Equal to std::floor within the int range, without its libm/SSE4.1-less slow path.
-inline Eigen::Vector3i floor_cells(const Eigen::Vector3f& p) {
-  Eigen::Vector3i c;
-  for (int i = 0; i < 3; ++i) {
-    const int t = static_cast<int>(p[i]);
-    c[i] = t - (p[i] < static_cast<float>(t) ? 1 : 0);
-  }
-  return c;
+/// floor(x) as a cell index: the truncating cast, one lower for negative non-integers. Equal
+/// to std::floor within the int range, without its libm/SSE4.1-less slow path.
+inline int32_t floor_cell(float x) {
+  const int32_t t = static_cast<int32_t>(x);
+  return t - (x < static_cast<float>(t) ? 1 : 0);
 }
+inline Eigen::Vector3i floor_cells(const Eigen::Vector3f& p) { return {floor_cell(p.x()), floor_cell(p.y()), floor_cell(p.z())}; }
 
 /// Visits n cells from `cell`, each step along the axis of the smallest t_max (ties: as
 /// x < y ? (x < z ? x : z) : (y < z ? y : z), i.e. x when x < y and x < z, else y when y < z,
@@ -318,12 +315,6 @@ struct RowPoints {
   std::vector<int32_t> vx, vy, vz;
   uint64_t key(int u) const { return pack_key(Eigen::Vector3i(vx[u], vy[u], vz[u])); }
 };
-
-/// floor(x) of a float within the int range, as floor_cells.
-inline int32_t floor_cell(float x) {
-  const int32_t t = static_cast<int32_t>(x);
-  return t - (x < static_cast<float>(t) ? 1 : 0);
-}
 
 /// What back-projecting one row needs: the world ray of pixel u is d(u) = col0 * (u - cx) / fx
 /// + ray0, its point t + z d(u).
