@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_options.hpp"
 #include "semap/core/error.hpp"
 #include "core/progress.hpp"
 #include "semap/eval/object_metrics.hpp"
@@ -98,24 +99,26 @@ int run_child(const Args& a) {
 
 int main(int argc, char** argv) {
   Args a;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string k = argv[i], v = argv[i + 1];
-    if (k == "--frames") a.frames = std::stoul(v);
-    else if (k == "--loop-frames") a.loop_frames = std::stoi(v);
-    else if (k == "--width") a.width = std::stoi(v);
-    else if (k == "--height") a.height = std::stoi(v);
-    else if (k == "--threads") a.threads = std::stoi(v);
-    else if (k == "--drop-distance") a.drop_distance = std::stod(v);
-    else if (k == "--out") a.out = v;
-    else if (k == "--child") a.child_frames = std::stoul(v);
-    else if (k == "--child-drop") a.child_drop = std::stod(v);
-    else if (k == "--child-dataset") a.child_dataset = v;
-    else if (k == "--child-out") a.child_out = v;
-    else {
-      std::fprintf(stderr, "bench_memory: unknown option %s\n", k.c_str());
-      return 2;
-    }
-  }
+  const auto exit_code = bench::parse_options(
+      argc, argv, 1,
+      "[--frames 10000] [--loop-frames 500] [--width 160] [--height 120] [--threads 2]\n"
+      "       [--drop-distance 3.0] [--out DIR]",
+      [&](const std::string& k, const std::string& v) {
+        if (k == "--frames") a.frames = std::stoul(v);
+        else if (k == "--loop-frames") a.loop_frames = std::stoi(v);
+        else if (k == "--width") a.width = std::stoi(v);
+        else if (k == "--height") a.height = std::stoi(v);
+        else if (k == "--threads") a.threads = std::stoi(v);
+        else if (k == "--drop-distance") a.drop_distance = std::stod(v);
+        else if (k == "--out") a.out = v;
+        else if (k == "--child") a.child_frames = std::stoul(v);
+        else if (k == "--child-drop") a.child_drop = std::stod(v);
+        else if (k == "--child-dataset") a.child_dataset = v;
+        else if (k == "--child-out") a.child_out = v;
+        else return false;
+        return true;
+      });
+  if (exit_code) return *exit_code;
   try {
     if (a.child_frames) return run_child(a);
 

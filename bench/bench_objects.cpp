@@ -16,6 +16,7 @@
 #include <random>
 #include <string>
 
+#include "bench/bench_options.hpp"
 #include "semap/io/dataset.hpp"
 #include "semap/pipeline/outputs.hpp"
 #include "semap/pipeline/semap_config.hpp"
@@ -95,15 +96,21 @@ int main(int argc, char** argv) {
   int frames = 100, step = 2;
   std::string real_dataset, model, config_path;
   std::filesystem::path out = std::filesystem::temp_directory_path() / "semap_bench_objects";
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string key = argv[i];
-    if (key == "--frames") frames = std::atoi(argv[i + 1]);
-    else if (key == "--step") step = std::atoi(argv[i + 1]);
-    else if (key == "--out") out = argv[i + 1];
-    else if (key == "--real") real_dataset = argv[i + 1];
-    else if (key == "--model") model = argv[i + 1];
-    else if (key == "--config") config_path = argv[i + 1];
-  }
+  const auto exit_code = bench::parse_options(
+      argc, argv, 1,
+      "[--frames N] [--step K] [--out DIR]\n"
+      "       --real DATASET --model yolo:PATH|groundtruth [--step K] [--out DIR] [--config C.yaml]",
+      [&](const std::string& key, const std::string& v) {
+        if (key == "--frames") frames = std::stoi(v);
+        else if (key == "--step") step = std::stoi(v);
+        else if (key == "--out") out = v;
+        else if (key == "--real") real_dataset = v;
+        else if (key == "--model") model = v;
+        else if (key == "--config") config_path = v;
+        else return false;
+        return true;
+      });
+  if (exit_code) return *exit_code;
   if (!real_dataset.empty()) {
     const auto reader = open_dataset(real_dataset);
     SegmentationConfig seg_config;

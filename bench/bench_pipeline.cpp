@@ -20,6 +20,7 @@
 #include <string>
 #include <unistd.h>
 
+#include "bench/bench_options.hpp"
 #include "semap/pipeline/run_pipeline.hpp"
 
 using namespace semap;
@@ -43,8 +44,13 @@ const std::vector<BudgetStage> kStages = {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 2) {
-    std::cerr << "usage: bench_pipeline DATASET [--segmenter SPEC] [--frames N] [--threads N] [--target-fps F] [--config FILE]\n";
+  constexpr const char* kUsage = "DATASET [--segmenter SPEC] [--frames N] [--threads N] [--target-fps F] [--config FILE]";
+  if (argc < 2 || argv[1][0] == '-') {
+    if (argc >= 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) {
+      std::cout << "usage: bench_pipeline " << kUsage << "\n";
+      return 0;
+    }
+    std::cerr << "usage: bench_pipeline " << kUsage << "\n";
     return 2;
   }
   RunOptions options;
@@ -54,18 +60,16 @@ int main(int argc, char** argv) {
   int threads = 2;
   double target_fps = 30;
   fs::path config_path;
-  for (int i = 2; i + 1 < argc; i += 2) {
-    const std::string a = argv[i], v = argv[i + 1];
+  const auto exit_code = bench::parse_options(argc, argv, 2, kUsage, [&](const std::string& a, const std::string& v) {
     if (a == "--segmenter") options.segmenter = v;
     else if (a == "--frames") options.max_frames = std::stoul(v);
     else if (a == "--threads") threads = std::stoi(v);
     else if (a == "--target-fps") target_fps = std::stod(v);
     else if (a == "--config") config_path = v;
-    else {
-      std::cerr << "unknown option " << a << "\n";
-      return 2;
-    }
-  }
+    else return false;
+    return true;
+  });
+  if (exit_code) return *exit_code;
   SemapConfig config = load_semap_config(config_path);
   config.pipeline.threads = threads;
   options.out_dir = fs::temp_directory_path() / ("bench_pipeline_" + std::to_string(::getpid()));

@@ -28,6 +28,7 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include "bench/bench_options.hpp"
 #include "core/paths.hpp"
 #include "semap/io/dataset.hpp"
 #include "synth/synth_config.hpp"
@@ -469,21 +470,23 @@ int main(int argc, char** argv) {
   std::vector<std::string> only_variants;
   std::string memory_system;  // --memory-child
   bool memory = true;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string a = argv[i], v = argv[i + 1];
-    if (a == "--frames") frames = std::stoi(v);
-    else if (a == "--synthetic-frames") synthetic_frames = std::stoi(v);
-    else if (a == "--threads") threads = std::stoi(v);
-    else if (a == "--voxels") voxels = parse_list(v);
-    else if (a == "--synthetic") synthetic_dir = v;
-    else if (a == "--variants") only_variants = split_list(v);
-    else if (a == "--memory-child") memory_system = v;
-    else if (a == "--memory") memory = v != "0";
-    else {
-      std::cerr << "unknown option " << a << "\n";
-      return 2;
-    }
-  }
+  const auto exit_code = bench::parse_options(
+      argc, argv, 1,
+      "[--frames 200] [--synthetic-frames 60] [--threads 2] [--voxels 0.01,0.02,0.05] [--synthetic DIR]\n"
+      "       [--variants ours_projective_core,...] [--memory 1]",
+      [&](const std::string& a, const std::string& v) {
+        if (a == "--frames") frames = std::stoi(v);
+        else if (a == "--synthetic-frames") synthetic_frames = std::stoi(v);
+        else if (a == "--threads") threads = std::stoi(v);
+        else if (a == "--voxels") voxels = parse_list(v);
+        else if (a == "--synthetic") synthetic_dir = v;
+        else if (a == "--variants") only_variants = split_list(v);
+        else if (a == "--memory-child") memory_system = v;
+        else if (a == "--memory") memory = v != "0";
+        else return false;
+        return true;
+      });
+  if (exit_code) return *exit_code;
   const fs::path tum = data_dir(fs::path(SEMAP_SHARED_DIR) / "data") / "tum_fr1_rpy";
   if (!memory_system.empty()) return memory_child(memory_system, tum, frames, voxels.at(0), threads);
   std::vector<Sequence> sequences;
