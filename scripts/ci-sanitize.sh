@@ -47,8 +47,18 @@ if [ "${SEMAP_ASAN:-1}" = 1 ]; then
   export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
   t0=$SECONDS
   labels=$(IFS='|'; echo "^(${ASAN_FOLDERS[*]})$")
-  (cd build-asan && ctest -L "$labels" -LE heavy -E "$SAME_PATH_ONE_THREAD" --output-on-failure -j "$JOBS" --timeout 1200)
-  fail_on_reports build-asan/Testing/Temporary/LastTest.log
+  log=build-asan/Testing/Temporary/LastTest.log
+  if ! (cd build-asan && ctest -L "$labels" -LE heavy -E "$SAME_PATH_ONE_THREAD" --output-on-failure -j "$JOBS" --timeout 1200); then
+    # LeakSanitizer's own stop-the-world tracer sometimes segfaults at exit after a test passed
+    # (google/sanitizers#1353, open; seen once here, 2026-12-03: MapMerge, passed 3 of 3 reruns).
+    # Only then the failed tests run once more; any other failure fails the step as it is.
+    grep -q "LeakSanitizer has encountered a fatal error" "$log" || exit 1
+    cp "$log" "$log.first"
+    echo "semap sanitize: LeakSanitizer's tracer crashed; running the failed tests once more"
+    (cd build-asan && ctest --rerun-failed --output-on-failure -j "$JOBS" --timeout 1200)
+    fail_on_reports "$log.first"
+  fi
+  fail_on_reports "$log"
   echo "semap sanitize: ASan+UBSan on ${ASAN_FOLDERS[*]} passed with no report ($((SECONDS - t0)) s)"
 fi
 
