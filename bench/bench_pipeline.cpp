@@ -18,6 +18,7 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <string_view>
 #include <unistd.h>
 
 #include "bench/bench_options.hpp"
@@ -45,13 +46,10 @@ const std::vector<BudgetStage> kStages = {
 
 int main(int argc, char** argv) {
   constexpr const char* kUsage = "DATASET [--segmenter SPEC] [--frames N] [--threads N] [--target-fps F] [--config FILE]";
-  if (argc < 2 || argv[1][0] == '-') {
-    if (argc >= 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) {
-      std::cout << "usage: bench_pipeline " << kUsage << "\n";
-      return 0;
-    }
-    std::cerr << "usage: bench_pipeline " << kUsage << "\n";
-    return 2;
+  if (argc < 2 || argv[1][0] == '-') {  // no DATASET: the usage, on stdout when asked for
+    const bool help = argc >= 2 && (std::string_view(argv[1]) == "--help" || std::string_view(argv[1]) == "-h");
+    (help ? std::cout : std::cerr) << "usage: bench_pipeline " << kUsage << "\n";
+    return help ? 0 : 2;
   }
   RunOptions options;
   options.dataset = argv[1];
