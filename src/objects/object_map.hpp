@@ -63,6 +63,16 @@ ClassId evidence_class(const std::vector<double>& score_sum, double min_share);
 /// Share of each class in the evidence (sums to 1; all 0 without evidence).
 std::vector<double> evidence_shares(const std::vector<double>& score_sum);
 
+/// The values at the trim_fraction and 1 - trim_fraction quantiles of `v` (exact min / max at 0);
+/// reorders `v`.
+std::pair<double, double> trimmed_range(std::vector<double>& v, double trim_fraction);
+/// The points of the largest cluster whose members are linked by chains of neighbours closer than
+/// about `link_distance` (cells of that size, 26-connected). Stray points that bled into an
+/// instance across a depth edge form their own small clusters and are left out.
+std::vector<Eigen::Vector3f> largest_cluster(const std::vector<Eigen::Vector3f>& points, double link_distance);
+/// Axis-aligned box of the points with `trim_fraction` of them ignored at each end of every axis.
+Eigen::AlignedBox3f trimmed_box(const std::vector<Eigen::Vector3f>& points, double trim_fraction);
+
 struct ObjectMapMergeCounts {
   size_t merged = 0;  ///< instances of the other map folded into one of this map
   size_t added = 0;   ///< instances of the other map added as new objects
@@ -136,7 +146,10 @@ class ObjectMap {
   /// Adds a segment's class scores to the instance's evidence and re-decides its class.
   void add_scores(ObjectInstance& instance, const std::vector<double>& scores);
   /// C5 test (3): the smaller instance's points lie on the larger's surface (C4 overlap) or,
-  /// extension, inside its box (two views of an object from opposite sides share no surface).
+  /// extension, inside the box of its body (two views of an object from opposite sides share no
+  /// surface). The body box (largest cluster, trimmed as the exported boxes) ignores the stray
+  /// points a bleeding mask leaves: with the raw box one such cluster 30 cm into a touching
+  /// neighbour made the two one object.
   bool geometric_overlap(const ObjectInstance& a, const ObjectInstance& b) const;
   /// C5 promote / delete pass over NEW and UNSTABLE instances; marks deletions in `remove`.
   void promote_or_delete(size_t step, bool ignore_recency, std::vector<char>& remove, OptimisationStats& stats);

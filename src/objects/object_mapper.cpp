@@ -70,16 +70,6 @@ ObjectMapCounts ObjectMapper::counts() const {
   return c;
 }
 
-namespace {
-/// The values at the trim_fraction and 1 - trim_fraction quantiles (exact min / max at 0).
-std::pair<double, double> trimmed_range(std::vector<double>& v, double trim_fraction) {
-  const size_t n = v.size(), k = std::min(n - 1, static_cast<size_t>(trim_fraction * static_cast<double>(n)));
-  std::nth_element(v.begin(), v.begin() + k, v.end());
-  const double lo = v[k];
-  std::nth_element(v.begin(), v.begin() + (n - 1 - k), v.end());
-  return {lo, v[n - 1 - k]};
-}
-}  // namespace
 
 OrientedBox fit_oriented_box(const std::vector<Eigen::Vector3f>& points, double trim_fraction) {
   OrientedBox box;
@@ -107,49 +97,6 @@ OrientedBox fit_oriented_box(const std::vector<Eigen::Vector3f>& points, double 
   return box;
 }
 
-std::vector<Eigen::Vector3f> largest_cluster(const std::vector<Eigen::Vector3f>& points, double link_distance) {
-  if (!(link_distance > 0) || points.size() < 2) return points;
-  // Connected components of occupied cells (26-neighbourhood), then the points of the largest.
-  auto key = [](const Eigen::Vector3i& c) {
-    return (static_cast<uint64_t>(c.x() + (1 << 20)) << 42) | (static_cast<uint64_t>(c.y() + (1 << 20)) << 21) |
-           static_cast<uint64_t>(c.z() + (1 << 20));
-  };
-  std::vector<Eigen::Vector3i> cell_of(points.size());
-  std::unordered_map<uint64_t, int> component;  // cell -> component (-1 = not yet visited)
-  for (size_t i = 0; i < points.size(); ++i) {
-    cell_of[i] = (points[i].cast<double>() / link_distance).array().floor().cast<int>();
-    component.emplace(key(cell_of[i]), -1);
-  }
-  int components = 0;
-  std::vector<Eigen::Vector3i> stack;
-  for (size_t i = 0; i < points.size(); ++i) {
-    if (component[key(cell_of[i])] >= 0) continue;
-    const int id = components++;
-    component[key(cell_of[i])] = id;
-    stack.assign(1, cell_of[i]);
-    while (!stack.empty()) {
-      const Eigen::Vector3i c = stack.back();
-      stack.pop_back();
-      for (int dx = -1; dx <= 1; ++dx)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dz = -1; dz <= 1; ++dz) {
-            const auto it = component.find(key(c + Eigen::Vector3i(dx, dy, dz)));
-            if (it == component.end() || it->second >= 0) continue;
-            it->second = id;
-            stack.push_back(c + Eigen::Vector3i(dx, dy, dz));
-          }
-    }
-  }
-  std::vector<size_t> points_per_component(static_cast<size_t>(components), 0);
-  for (size_t i = 0; i < points.size(); ++i) ++points_per_component[component[key(cell_of[i])]];
-  const int best = static_cast<int>(std::max_element(points_per_component.begin(), points_per_component.end()) -
-                                    points_per_component.begin());
-  std::vector<Eigen::Vector3f> out;
-  out.reserve(points_per_component[best]);
-  for (size_t i = 0; i < points.size(); ++i)
-    if (component[key(cell_of[i])] == best) out.push_back(points[i]);
-  return out;
-}
 
 namespace {
 
@@ -188,13 +135,9 @@ std::vector<ObjectSummary> ObjectMapper::summaries(const SurfaceProjection& onto
     exported_points(map_, inst, config_.points_on_surface ? onto_surface : SurfaceProjection{}, o);
     // Boxes describe the object's body: its largest cluster, trimmed of stray points.
     const std::vector<Eigen::Vector3f> body = largest_cluster(o.points, config_.box_cluster_distance);
-    std::vector<double> coordinate(body.size());
-    for (int a = 0; a < 3; ++a) {
-      for (size_t i = 0; i < body.size(); ++i) coordinate[i] = body[i][a];
-      const auto [l, h] = trimmed_range(coordinate, config_.box_trim_fraction);
-      o.aabb_min[a] = static_cast<float>(l);
-      o.aabb_max[a] = static_cast<float>(h);
-    }
+    const Eigen::AlignedBox3f aabb = trimmed_box(body, config_.box_trim_fraction);
+    o.aabb_min = aabb.min();
+    o.aabb_max = aabb.max();
     o.box = fit_oriented_box(body, config_.box_trim_fraction);
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (const auto& p : o.points) sum += p.cast<double>();

@@ -97,9 +97,5 @@ class ObjectMapper {
 
 /// `trim_fraction` of the points is ignored at each end of every box axis (0 = exact hull).
 OrientedBox fit_oriented_box(const std::vector<Eigen::Vector3f>& points, double trim_fraction = 0.0);
-/// The points of the largest cluster whose members are linked by chains of neighbours closer than
-/// about `link_distance` (cells of that size, 26-connected). Stray points that bled into an
-/// instance across a depth edge form their own small clusters and are left out.
-std::vector<Eigen::Vector3f> largest_cluster(const std::vector<Eigen::Vector3f>& points, double link_distance);
 
 }  // namespace semap

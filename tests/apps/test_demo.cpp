@@ -12,10 +12,12 @@
 namespace semap::test {
 namespace {
 
-// Bounds with a margin over the figures measured by this test (2026-12-01, the closing printf):
-// ATE 0.16 cm, mIoU 0.943 (compact vote 0.863), WOv 0.582 (0.484 before object points were projected onto the fused surface), 11 objects for 12.
+// Bounds with a margin over the figures measured by this test (2026-12-03, the closing printf):
+// ATE 0.16 cm, mIoU 0.943 (compact vote 0.863), WOv 0.608, 12 objects for 12 (0.582 and 11 while
+// C5's containment test used raw boxes: the two touching chairs merged; 0.484 before object
+// points were projected onto the fused surface).
 constexpr double kDemoMaxAteM = 0.01;
-constexpr double kDemoMinWov = 0.55;
+constexpr double kDemoMinWov = 0.58;
 
 nlohmann::json run_demo(const TempDir& dir, const std::string& name, const std::string& config_yaml = {}) {
   std::string command = shell_quote(semap_executable().string()) + " demo --out " + shell_quote((dir / name).string());

@@ -510,6 +510,41 @@ TEST(ObjectsMap, SegmentMergesOnlyIntoAnInstanceWithEvidenceForItsClass) {
 // C5 test (3) with the extent: two stable duplicates of one chair, one built from its front, one
 // from its back (no shared surface). The smaller lies inside the larger's box: merged. The same
 // back face 0.5 m away is another object.
+// Two chairs side by side (touching at x = 0.45 m). A mask that bleeds over the border once left
+// the second chair a stray cluster 10 cm above the first one's seat. Its raw box then held all of
+// the first chair, and C5's containment test (3) merged the two; the body box (the largest
+// cluster linked within merge_body_link_distance, trimmed) ignores the stray cluster.
+TEST(ObjectsMap, StrayClusterOfATouchingNeighbourDoesNotMergeItByContainment) {
+  auto chair_at = [](float x0) {
+    ObjectSegment s;
+    for (float x = x0; x < x0 + 0.45f; x += 0.01f)
+      for (float y = 0; y < 0.45f; y += 0.01f) s.points.emplace_back(x, y, 0.45f);  // seat
+    for (float x = x0; x < x0 + 0.45f; x += 0.01f)
+      for (float z = 0.45f; z < 0.9f; z += 0.01f) s.points.emplace_back(x, 0.45f, z);  // back rest
+    return certain_segment(std::move(s), id(Label::kChair));
+  };
+  for (const bool stray : {false, true}) {
+    ObjectMap map(toy_config());
+    for (int i = 0; i < 6; ++i) {
+      ObjectSegment second = chair_at(0.46f);
+      if (stray && i == 2)
+        for (float x = 0.1f; x < 0.2f; x += 0.01f)
+          for (float y = 0.1f; y < 0.2f; y += 0.01f) second.points.emplace_back(x, y, 0.55f);
+      map.associate({chair_at(0.0f), certain_segment(std::move(second), id(Label::kChair))}, i, i + 1);
+    }
+    ASSERT_EQ(map.instances().size(), 2u);
+    SCOPED_TRACE(stray);
+    if (stray) {  // the raw box of the second chair holds the first one
+      const auto& [first, second] = std::tie(map.instances()[0], map.instances()[1]);
+      EXPECT_TRUE(second.bounds.contains(first.centroid()));
+    }
+    const auto stats = map.optimise(50, false);
+    EXPECT_EQ(stats.pairs_checked, 1);  // (1) and (2) hold: touching boxes make them co-candidates
+    EXPECT_EQ(stats.merged, 0);
+    EXPECT_EQ(stats.after_merge, 2u);
+  }
+}
+
 TEST(ObjectsMap, MergeOfViewsFromOppositeSidesByContainment) {
   auto face = [](float x, float z0, float z1, ClassId cls) {
     ObjectSegment s;

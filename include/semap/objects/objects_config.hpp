@@ -79,6 +79,7 @@ struct ObjectsConfig {
   double merge_coassociation = 0.7; ///< co-association count must exceed this fraction of s_i or s_j
   double merge_overlap_ratio = 0.3; ///< geometric overlap (C4 formula, smaller onto larger) needed to merge
   double merge_containment_ratio = 0.5;  ///< extension to C5 (3): or this fraction of the smaller's points inside the larger's box
+  double merge_body_link_distance = 0.1;  ///< m, C5 containment: the larger instance's box is that of its largest cluster linked within this (0: all points)
   double merge_max_js = 0.3;        ///< nats, max Jensen-Shannon divergence of the label distributions
   /// Evidence by default: a detector that gives one class and its score (YOLO) leaves a residual
   /// of 0.5-0.7 that dominates the augmented vectors, so a cup (0.3) on a table (0.4) scored JS
@@ -138,6 +139,7 @@ struct ObjectsConfig {
     v.param("merge_coassociation", merge_coassociation, "", "co-association fraction for merging (C5)", fraction());
     v.param("merge_overlap_ratio", merge_overlap_ratio, "", "overlap needed for merging (C5 test 3): points of the smaller within d_point of the larger", fraction());
     v.param("merge_containment_ratio", merge_containment_ratio, "", "extension to C5 test 3: or this fraction of the smaller's points inside the larger's box (views of an object from opposite sides share no surface); 1 off", fraction());
+    v.param("merge_body_link_distance", merge_body_link_distance, "m", "extension to C5 test 3: the containment box is that of the larger instance's largest cluster linked within this distance, trimmed by box_trim_fraction (stray points a bleeding mask left across a touching neighbour made the two one object); 0 = the box of all points", non_negative(1.0));
     v.param("merge_max_js", merge_max_js, "nats", "max JS divergence for merging (C5)", {0.0, 0.6932});
     v.param("merge_distribution", merge_distribution, kMergeDistributionNames, "label distributions of the C5 JS test (4): evidence (class shares of the summed scores) or augmented (mean scores + residual as other, as printed)");
     v.param("class_min_share", class_min_share, "", "an object takes the class with the most evidence only when it holds this share of the class evidence, else other (C3)", fraction());
