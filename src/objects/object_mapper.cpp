@@ -10,7 +10,6 @@
 
 #include <spdlog/spdlog.h>
 
-
 namespace semap {
 
 namespace {
@@ -70,7 +69,6 @@ ObjectMapCounts ObjectMapper::counts() const {
   return c;
 }
 
-
 OrientedBox fit_oriented_box(const std::vector<Eigen::Vector3f>& points, double trim_fraction) {
   OrientedBox box;
   if (points.empty()) return box;
@@ -96,7 +94,6 @@ OrientedBox fit_oriented_box(const std::vector<Eigen::Vector3f>& points, double 
   box.center = (mean + axes * (0.5 * (lo + hi))).cast<float>();
   return box;
 }
-
 
 namespace {
 
