@@ -250,8 +250,9 @@ struct TouchedBlocks {
   std::vector<Block*> blocks;
   uint32_t stamp = 0;
   size_t allocated = 0;
-  int32_t touch(TsdfMap& map, const BlockIndex& b) {
-    Block* block = map.find_block(b);
+  /// `found`: the block when the caller already looked it up (nullptr: looked up here).
+  int32_t touch(TsdfMap& map, const BlockIndex& b, Block* found = nullptr) {
+    Block* block = found ? found : map.find_block(b);
     if (!block) {
       block = &map.allocate_block(b);
       ++allocated;
@@ -486,7 +487,8 @@ class GroupedIntegrator final : public ArenaIntegrator {
   struct BlockRun {
     BlockIndex block;
     uint32_t count;
-    int32_t slot;  ///< the block's index among the frame's touched blocks
+    int32_t slot;   ///< the block's index among the frame's touched blocks
+    Block* found;   ///< the block if it existed before this frame (looked up in parallel)
   };
   /// One voxel update of a ray, its voxel by the local index within its block (the block is
   /// its run's).
@@ -561,7 +563,7 @@ class GroupedIntegrator final : public ArenaIntegrator {
           if (cells.d[j] <= -delta) continue;
           const VoxelIndex voxel = cells.voxel(j);
           const BlockIndex b = block_of_voxel(voxel);
-          if (runs.empty() || runs.back().block != b) runs.push_back(BlockRun{b, 0, -1});
+          if (runs.empty() || runs.back().block != b) runs.push_back(BlockRun{b, 0, -1, find_existing(map, runs, b)});
           ++runs.back().count;
           out.push_back(BlockUpdate{cells.d[j], static_cast<int32_t>(g), static_cast<uint16_t>(local_index(voxel))});
         }
@@ -573,7 +575,7 @@ class GroupedIntegrator final : public ArenaIntegrator {
     touched.stamp = map.next_frame_stamp();
     size_t n_updates = 0;
     for (auto& runs : chunk_runs_)
-      for (BlockRun& run : runs) run.slot = touched.touch(map, run.block), n_updates += run.count;
+      for (BlockRun& run : runs) run.slot = touched.touch(map, run.block, run.found), n_updates += run.count;
     const size_t n_blocks = touched.blocks.size();
     bucket_runs(n_blocks);
     // 6. Apply per block in parallel (each block's updates in ray order: deterministic).
@@ -597,6 +599,16 @@ class GroupedIntegrator final : public ArenaIntegrator {
     stats_.voxel_updates = n_updates;
     stats_.touched_blocks = n_blocks;
     stats_.allocated_blocks = touched.allocated;
+  }
+
+  /// Block b of a new run, looked up while the map is only read (step 4, in parallel; the
+  /// serial step 5 then only allocates what is missing): a chunk's rays are neighbours, so it
+  /// is mostly the block of one of the chunk's last runs.
+  static Block* find_existing(TsdfMap& map, const std::vector<BlockRun>& runs, const BlockIndex& b) {
+    constexpr size_t kRecent = 4;
+    for (size_t i = runs.size(); i > 0 && i + kRecent > runs.size(); --i)
+      if (runs[i - 1].block == b) return runs[i - 1].found;
+    return map.find_block(b);
   }
 
   /// block_runs_: the runs of every chunk by block slot, each block's in ray order (stable
@@ -731,6 +743,9 @@ class GroupedIntegrator final : public ArenaIntegrator {
     std::array<int32_t, kBlockVoxels> best_group;
     if (p.labels) best_group.fill(-1);
     for (size_t r = p.offsets[k]; r < p.offsets[k + 1]; ++r) {
+      // The runs lie where each chunk wrote them (a jump per run): the next one's first
+      // updates are fetched while this one is applied.
+      if (r + 1 < p.offsets[k + 1]) __builtin_prefetch(p.runs[r + 1].first);
       for (const BlockUpdate& u : std::span(p.runs[r].first, p.runs[r].count)) {
         const RayInfo& ray = p.rays[u.group];
         const int li = u.li;
