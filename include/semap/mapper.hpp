@@ -14,7 +14,9 @@
 // Conventions: poses are T_world_camera (camera-to-world, metres). The world frame is the
 // first frame's camera when semap tracks, or the caller's frame when the caller gives poses.
 // Depth is CV_32FC1 metres (0 = invalid) at the camera's depth resolution; colour is CV_8UC3
-// BGR (OpenCV order) at the colour resolution (METHODS.md B2 registers it to depth).
+// BGR (OpenCV order) at the colour resolution (METHODS.md B2 registers it to depth). Frames
+// are given as the camera took them: with CameraModel::distortion set, add_frame undistorts
+// them once and every stage and output works in the pinhole image of the same intrinsics.
 //
 // Inside, tracking (METHODS A1-A4) runs on the caller's thread; segmentation (C1, B1), TSDF
 // fusion (B3-B7, A6) and the object map (C2-C5) run on their own threads behind bounded

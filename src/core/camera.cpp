@@ -45,6 +45,10 @@ void validate_camera(const CameraModel& camera, const std::string& source) {
   if (!std::isfinite(s) || s < L::kMinDepthScale || s > L::kMaxDepthScale)
     throw Error(source, "camera depth_scale = " + compact_number(s) + " is outside " + compact_number(L::kMinDepthScale) +
                             ".." + compact_number(L::kMaxDepthScale) + " raw units per metre");
+  for (double d : camera.distortion)
+    if (!std::isfinite(d) || std::abs(d) > L::kMaxDistortion)
+      throw Error(source, "camera distortion coefficient " + compact_number(d) + " is not a number within +-" +
+                              compact_number(L::kMaxDistortion));
   if (!camera.colour) return;
   check_intrinsics(camera.colour->intrinsics, source, "colour.");
   const Pose& T = camera.colour->T_depth_colour;

@@ -6,6 +6,7 @@
 #include <cctype>
 
 #include "semap/core/error.hpp"
+#include "core/lens_undistortion.hpp"
 #include "io/dataset_layouts.hpp"
 #include "io/image_io.hpp"
 #include "io/rosbag_backend.hpp"
@@ -74,7 +75,23 @@ void DatasetReader::check_index(size_t i) const {
     throw Error(root_, "frame " + std::to_string(i) + " out of range (" + std::to_string(records_.size()) + " frames)");
 }
 
+void DatasetReader::set_camera(const CameraModel& stored) {
+  undistortion_ = stored.has_distortion() ? std::make_shared<const LensUndistortion>(stored) : nullptr;
+  camera_ = LensUndistortion::pinhole(stored);
+}
+
+Frame DatasetReader::load(size_t i) const {
+  Frame frame = decode(i);
+  if (undistortion_) undistortion_->apply(frame);
+  return frame;
+}
+
 cv::Mat DatasetReader::load_depth(size_t i) const {
+  cv::Mat depth = decode_depth(i);
+  return undistortion_ ? undistortion_->depth(depth) : depth;
+}
+
+cv::Mat DatasetReader::decode_depth(size_t i) const {
   check_index(i);
   return read_depth_image(records_[i].depth, camera_.depth_scale, cv::Size(camera_.depth.width, camera_.depth.height));
 }
@@ -99,8 +116,8 @@ Frame DatasetReader::make_frame(size_t i, cv::Mat depth, cv::Mat rgb, const fs::
   return frame;
 }
 
-Frame DatasetReader::load(size_t i) const {
-  cv::Mat depth = load_depth(i);  // checks i
+Frame DatasetReader::decode(size_t i) const {
+  cv::Mat depth = decode_depth(i);  // checks i
   const FrameRecord& rec = records_[i];
   Frame frame = make_frame(i, std::move(depth), read_colour_image(rec.rgb), rec.rgb);
   if (!rec.labels.empty()) {
@@ -175,12 +192,19 @@ std::unique_ptr<DatasetReader> open_layout(const fs::path& root, const DatasetOp
 bool have_rosbag_support() { return io_detail::rosbag_backend::available(); }
 
 CameraModel tum_camera_preset(int freiburg) {
-  // Published TUM RGB-D calibrations (ROS default for depth scale 5000 = 1/5 mm).
+  // Published TUM RGB-D calibrations with their lens distortion (depth scale 5000 = 1/5 mm).
   CameraModel camera;
   camera.depth_scale = 5000.0;
   switch (freiburg) {
-    case 1: camera.depth = {517.3, 516.5, 318.6, 255.3, 640, 480}; break;
-    case 2: camera.depth = {520.9, 521.0, 325.1, 249.7, 640, 480}; break;
+    case 1:
+      camera.depth = {517.3, 516.5, 318.6, 255.3, 640, 480};
+      camera.distortion = {0.2624, -0.9531, -0.0054, 0.0026, 1.1633};
+      break;
+    case 2:
+      camera.depth = {520.9, 521.0, 325.1, 249.7, 640, 480};
+      camera.distortion = {0.2312, -0.7849, -0.0033, -0.0001, 0.9172};
+      break;
+    // freiburg3's images were undistorted by TUM before release.
     case 3: camera.depth = {535.4, 539.2, 320.1, 247.6, 640, 480}; break;
     default: throw Error("tum_camera_preset", "freiburg must be 1, 2 or 3");
   }

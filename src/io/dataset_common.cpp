@@ -195,7 +195,8 @@ int yaml_size(const YAML::Node& node, const std::string& file, const std::string
 }
 
 void apply_intrinsics(const YAML::Node& map, const std::string& file, const std::string& prefix,
-                      PinholeIntrinsics& k, double* depth_scale, Pose* T_depth_colour, bool* has_colour) {
+                      PinholeIntrinsics& k, double* depth_scale, Pose* T_depth_colour, bool* has_colour,
+                      std::array<double, 5>* distortion) {
   for (const auto& kv : map) {
     const std::string key = kv.first.as<std::string>();
     const std::string full = prefix + key;
@@ -206,6 +207,11 @@ void apply_intrinsics(const YAML::Node& map, const std::string& file, const std:
     else if (key == "width") k.width = yaml_size(kv.second, file, full);
     else if (key == "height") k.height = yaml_size(kv.second, file, full);
     else if (key == "depth_scale" && depth_scale) *depth_scale = yaml_number(kv.second, file, full);
+    else if (key == "distortion" && distortion) {
+      if (!kv.second.IsSequence() || kv.second.size() != 5)
+        throw Error(file, "'" + full + "' must list 5 numbers (OpenCV order k1 k2 p1 p2 k3)");
+      for (size_t j = 0; j < 5; ++j) (*distortion)[j] = yaml_number(kv.second[j], file, full);
+    }
     else if (key == "T_depth_colour" && T_depth_colour) {
       if (!kv.second.IsSequence() || kv.second.size() != 16) throw Error(file, "'" + full + "' must list 16 numbers");
       std::vector<double> m;
@@ -223,13 +229,13 @@ void apply_intrinsics(const YAML::Node& map, const std::string& file, const std:
 
 void apply_camera_node(const YAML::Node& node, const std::string& file, CameraModel& camera) {
   bool has_colour = false;
-  apply_intrinsics(node, file, "camera.", camera.depth, &camera.depth_scale, nullptr, &has_colour);
+  apply_intrinsics(node, file, "camera.", camera.depth, &camera.depth_scale, nullptr, &has_colour, &camera.distortion);
   if (!(camera.depth_scale > 0)) throw Error(file, "'camera.depth_scale' must be positive");
   if (has_colour) {
     CameraModel::ColourCamera colour;
     colour.intrinsics = camera.depth;  // unspecified keys default to the depth camera's
     apply_intrinsics(node["colour"], file, "camera.colour.", colour.intrinsics, nullptr, &colour.T_depth_colour,
-                     nullptr);
+                     nullptr, nullptr);
     camera.colour = colour;
   }
 }

@@ -290,7 +290,7 @@ class RosbagDataset : public DatasetReader {
   }
   std::string format() const override { return "rosbag"; }
 
-  cv::Mat load_depth(size_t i) const override {
+  cv::Mat decode_depth(size_t i) const override {
     check_index(i);
     const std::string where = records_[i].depth.string();
     cv::Mat depth = depth_.compressed ? decode_compressed_depth(bag_->read_compressed(handles_[i].second), where)
@@ -302,15 +302,15 @@ class RosbagDataset : public DatasetReader {
     return depth;
   }
 
-  Frame load(size_t i) const override {
-    cv::Mat depth = load_depth(i);  // checks i
+  Frame decode(size_t i) const override {
+    cv::Mat depth = decode_depth(i);  // checks i
     const std::string where = records_[i].rgb.string();
     cv::Mat rgb = rgb_.compressed ? decode_compressed_colour(bag_->read_compressed(handles_[i].first), where)
                                   : decode_raw_colour(bag_->read_image(handles_[i].first), where);
     return make_frame(i, std::move(depth), std::move(rgb), records_[i].rgb);
   }
 
-  void set_camera(CameraModel camera) { camera_ = std::move(camera); }
+  using DatasetReader::set_camera;
   void add_frame(FrameRecord record, size_t rgb_handle, size_t depth_handle) {
     records_.push_back(std::move(record));
     handles_.emplace_back(rgb_handle, depth_handle);

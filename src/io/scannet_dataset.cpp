@@ -215,7 +215,7 @@ class SensDataset : public DatasetReader {
   }
   std::string format() const override { return "scannet-sens"; }
 
-  cv::Mat load_depth(size_t i) const override {
+  cv::Mat decode_depth(size_t i) const override {
     check_index(i);
     const std::string bytes = read_bytes(frames_[i].depth_offset, frames_[i].depth_bytes);
     const fs::path& where = records_[i].depth;
@@ -230,8 +230,8 @@ class SensDataset : public DatasetReader {
     return depth_units_to_metres(raw, camera_.depth_scale);
   }
 
-  Frame load(size_t i) const override {
-    cv::Mat depth = load_depth(i);
+  Frame decode(size_t i) const override {
+    cv::Mat depth = decode_depth(i);
     const std::string bytes = read_bytes(frames_[i].colour_offset, frames_[i].colour_bytes);
     const fs::path& where = records_[i].rgb;
     cv::Mat rgb;

@@ -41,6 +41,7 @@ std::unique_ptr<DatasetReader> open_tum(const fs::path& root, const DatasetYaml*
   CameraModel camera;
   if (yaml && yaml->camera) {
     camera = tum_camera_preset(1);
+    camera.distortion = {0, 0, 0, 0, 0};  // a yaml camera names its own lens (camera.distortion)
     apply_yaml_camera(yaml, camera);
   } else {
     // The folder name, else the bag name in rgb.txt's header ("# file: 'rgbd_dataset_freiburg1_rpy.bag'").

@@ -24,8 +24,8 @@ constexpr double kFrameRate = 30.0;  // no timestamps in YCB-Video; frame number
 class YcbDataset : public LayoutDataset {
  public:
   using LayoutDataset::LayoutDataset;
-  Frame load(size_t i) const override {
-    Frame frame = DatasetReader::load(i);
+  Frame decode(size_t i) const override {
+    Frame frame = DatasetReader::decode(i);
     if (frame.labels.empty()) return frame;
     frame.labels.convertTo(frame.instances, CV_16U);  // raw YCB ids, one object each
     cv::Mat lut(1, 256, CV_8U);

@@ -9,6 +9,7 @@
 #include "semap/core/error.hpp"
 #include "objects/object_mapper.hpp"
 #include "core/archive.hpp"
+#include "core/lens_undistortion.hpp"
 #include "pipeline/map_archive.hpp"
 #include "pipeline/map_refresh.hpp"
 #include "pipeline/refresh_archive.hpp"
@@ -132,14 +133,15 @@ SegmentationResult segmentation_from_label_images(const cv::Mat& labels, const c
 }
 
 struct Mapper::Impl {
-  Impl(const SemapConfig& c, const CameraModel& cam, std::unique_ptr<Segmenter> seg)
+  Impl(const SemapConfig& c, const CameraModel& given_camera, std::unique_ptr<Segmenter> seg)
       : config(with_inline_stages(c)),
-        camera(cam),
-        segmenter(seg ? std::move(seg) : segmenter_from_config(c, cam)),
+        undistortion(given_camera),
+        camera(LensUndistortion::pinhole(given_camera)),
+        segmenter(seg ? std::move(seg) : segmenter_from_config(c, camera)),
         tsdf(c.tsdf),
-        objects(c.objects, cam),
-        temporal_filter(c.segmentation.temporal, cam.depth),
-        repair_archive(cam.depth_scale, static_cast<size_t>(c.pipeline.refresh_cache_mb) << 20),
+        objects(c.objects, camera),
+        temporal_filter(c.segmentation.temporal, camera.depth),
+        repair_archive(camera.depth_scale, static_cast<size_t>(c.pipeline.refresh_cache_mb) << 20),
         frame_archive(static_cast<size_t>(c.pipeline.refresh_cache_mb) << 20) {
     const bool threaded = c.pipeline.threads > 1;
     const auto queue = static_cast<size_t>(c.pipeline.queue_size);
@@ -174,7 +176,8 @@ struct Mapper::Impl {
   std::optional<IntegrationInput> refresh_input(size_t sequence, const Pose& T_world_camera) const;
 
   const SemapConfig config;
-  const CameraModel camera;
+  const LensUndistortion undistortion;  ///< of the given camera; frames are undistorted where they enter
+  const CameraModel camera;             ///< the pinhole camera every stage works with
   std::unique_ptr<Segmenter> segmenter;
   std::unique_ptr<Tracker> tracker;  ///< made at the first frame unless the caller gives poses
   std::optional<bool> external_poses;
@@ -406,6 +409,7 @@ std::optional<IntegrationInput> Mapper::Impl::refresh_input(size_t sequence, con
       std::tie(frame.depth, frame.rgb) = frame_archive.load(sequence);
     } else if (reloader) {
       frame = reloader(entry.frame_index, config.tsdf.colour_layer || !repair_archive.has(sequence));
+      undistortion.apply(frame);
       if (repair_archive.has(sequence)) {
         repair_archive.apply(sequence, frame.depth);
       } else if (config.tracking.depth_repair) {
@@ -498,6 +502,7 @@ FrameResult Mapper::add_frame(const Frame& frame, FrameHints hints) {
   }
   Frame own = frame;
   own.index = sequence;
+  m.undistortion.apply(own);
   TrackedFrame item = m.locate(own, hints.T_world_camera, result);
   result.T_world_camera = item.T_world_camera;
   result.fused = result.status != FrameStatus::lost;  // a pose that failed its checks is never fused

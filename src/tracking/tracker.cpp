@@ -120,7 +120,6 @@ struct Tracker::Impl {
     cfg.validate();
     orb = cv::ORB::create(cfg.orb_features, float(cfg.orb_scale_factor), cfg.orb_levels, 19, 0, 2,
                           cv::ORB::HARRIS_SCORE, 31, cfg.orb_fast_threshold);
-    init_undistortion();
     icp_params = cfg.icp;
     // Wide-baseline ICP (issue 16): twice the coarse iterations, the basin is at the coarse levels.
     wide_icp_params = cfg.icp;
@@ -152,26 +151,6 @@ struct Tracker::Impl {
     if (worker.joinable()) worker.join();
   }
 
-  /// Lens undistortion maps (CameraModel::distortion, issue 16), empty without distortion:
-  /// tracking then works in the ideal pinhole image of the same intrinsics.
-  cv::Mat undistort_map1, undistort_map2;
-  void init_undistortion() {
-    if (!camera.has_distortion()) return;
-    std::array<double, 5> d = camera.distortion;
-    const cv::Mat K = (cv::Mat_<double>(3, 3) << intr.fx, 0, intr.cx, 0, intr.fy, intr.cy, 0, 0, 1);
-    const cv::Mat D(1, 5, CV_64F, d.data());
-    cv::initUndistortRectifyMap(K, D, cv::Mat(), K, cv::Size(intr.width, intr.height), CV_16SC2, undistort_map1,
-                                undistort_map2);
-  }
-  /// Depth by nearest neighbour (no mixing across edges), grey bilinear.
-  void undistort(cv::Mat& depth, cv::Mat& gray) const {
-    if (undistort_map1.empty()) return;
-    cv::Mat d, g;
-    cv::remap(depth, d, undistort_map1, undistort_map2, cv::INTER_NEAREST, cv::BORDER_CONSTANT, cv::Scalar(0));
-    cv::remap(gray, g, undistort_map1, undistort_map2, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
-    depth = d;
-    gray = g;
-  }
 
   /// Keyframe (ICP target) pyramid; `source_only` for a tracked frame (completed by
   /// make_keyframe if it becomes one; METHODS.md A2 step 4).
@@ -499,7 +478,6 @@ struct Tracker::Impl {
       depth = repair_depth(frame.depth, gray, rp);
     }
     result.depth = depth;  // the frame's own pixel grid (the map integrates it with the colour)
-    undistort(depth, gray);
     result.timings.repair_ms = ms_since(t0);
 
     t0 = Clock::now();
@@ -784,7 +762,10 @@ struct Tracker::Impl {
 };
 
 Tracker::Tracker(const TrackingConfig& config, const CameraModel& camera)
-    : impl_(std::make_unique<Impl>(config, camera)) {}
+    : impl_(std::make_unique<Impl>(config, camera)) {
+  if (camera.has_distortion())  // the readers and the Mapper undistort before tracking (core/lens_undistortion.hpp)
+    throw Error("Tracker", "takes undistorted (pinhole) frames; the camera has lens distortion");
+}
 Tracker::~Tracker() = default;
 
 TrackResult Tracker::track(const Frame& frame) { return impl_->track(frame); }

@@ -76,7 +76,8 @@ struct KeyframeMatch {
 class Tracker {
  public:
   /// Validates the config (throws semap::Error). Colour must be registered to depth (an image of
-  /// another size is resized to the depth size).
+  /// another size is resized to the depth size). Frames are pinhole images: a camera with lens
+  /// distortion is an error (dataset readers and the Mapper undistort first).
   Tracker(const TrackingConfig& config, const CameraModel& camera);
   ~Tracker();
   Tracker(const Tracker&) = delete;

@@ -191,6 +191,31 @@ TEST(Datasets, GeneratedTumFolderWithPresetFromName) {
   EXPECT_NEAR(f.gt_T_world_camera->translation().x(), 0.3, 1e-9);
 }
 
+TEST(Datasets, LensDistortionIsUndistortedOnLoad) {
+  test::TempDir tmp;
+  const fs::path dir = tmp / "lens";
+  write_tum_folder(dir, 2);
+  const std::string camera = "format: tum\ncamera: {fx: 100, fy: 100, cx: 32, cy: 24, width: 64, height: 48, ";
+  test::write_text(dir / "dataset.yaml", camera + "distortion: [0.2, 0, 0, 0, 0]}\n");
+  const auto reader = open_dataset(dir);
+  EXPECT_FALSE(reader->camera().has_distortion());  // the delivered images are pinhole images
+  const Frame f = reader->load(1);
+  // k1 = 0.2 pulls the corner's source pixel 1 px outside the stored image: no depth there;
+  // the centre is where it was (constant 1.5 m in the generated folder).
+  EXPECT_EQ(f.depth.at<float>(0, 0), 0.0f);
+  EXPECT_NEAR(f.depth.at<float>(24, 32), 1.5f, 1e-6);
+  EXPECT_EQ(reader->load_depth(1).at<float>(0, 0), 0.0f);
+  // The freiburg1 preset carries TUM's published lens; a yaml camera has none unless it says so.
+  test::write_text(dir / "dataset.yaml", camera + "}\n");
+  EXPECT_NEAR(open_dataset(dir)->load(1).depth.at<float>(0, 0), 1.5f, 1e-6);
+  EXPECT_TRUE(tum_camera_preset(1).has_distortion());
+  EXPECT_FALSE(tum_camera_preset(3).has_distortion());
+  test::write_text(dir / "dataset.yaml", camera + "distortion: [0.2, 0]}\n");
+  EXPECT_TRUE(throws_naming([&] { open_dataset(dir); }, "'camera.distortion' must list 5 numbers"));
+  test::write_text(dir / "dataset.yaml", camera + "distortion: [200, 0, 0, 0, 0]}\n");
+  EXPECT_TRUE(throws_naming([&] { open_dataset(dir); }, "distortion coefficient 200"));
+}
+
 TEST(Datasets, GeneratedSyntheticLayout) {
   test::TempDir tmp;
   const fs::path dir = tmp.path();

@@ -36,7 +36,8 @@ struct CameraModel {
   /// Raw depth units per metre (TUM: 5000, 7-Scenes: 1000, YCB: 10000).
   double depth_scale = 5000.0;
   /// Lens distortion of the depth (= registered colour) image, OpenCV order k1 k2 p1 p2 k3;
-  /// all zero = none. Only tracking undistorts with it (issue 16: TUM fr1's strong distortion).
+  /// all zero = none. Frames are undistorted where they enter (dataset readers, Mapper::add_frame):
+  /// every stage works in the pinhole image of these intrinsics (issue 16: TUM fr1's k1 = 0.26).
   std::array<double, 5> distortion = {0, 0, 0, 0, 0};
   bool has_distortion() const {
     for (double d : distortion)
@@ -62,6 +63,7 @@ struct CameraLimits {
   static constexpr double kMaxFocalPerSize = 50.0;                ///< ~1.1 deg field of view
   static constexpr double kMinDepthScale = 1.0, kMaxDepthScale = 1e5;  ///< raw units per metre (1 m .. 10 um)
   static constexpr double kMaxColourBaseline = 1.0;               ///< |t| of T_depth_colour [m]
+  static constexpr double kMaxDistortion = 10.0;                  ///< |k1..k3|, |p1|, |p2| (real lenses: under ~2)
 };
 
 /// Throws semap::Error(source, "camera KEY = VALUE ...: WHY") unless every magnitude is inside

@@ -13,6 +13,8 @@
 
 namespace semap {
 
+class LensUndistortion;  // core/lens_undistortion.hpp (internal)
+
 /// One entry of a sequence: which files make frame i (decoded lazily).
 struct FrameRecord {
   double timestamp = 0.0;
@@ -28,13 +30,16 @@ class DatasetReader {
   virtual std::string format() const = 0;
   /// The dataset folder, or the file (.bag, .sens) for single-file formats.
   const std::filesystem::path& root() const { return root_; }
+  /// The camera of the delivered images: a lens with distortion (TUM fr1/fr2 presets,
+  /// dataset.yaml `distortion`) is undistorted on load, and this camera is then its pinhole model.
   const CameraModel& camera() const { return camera_; }
   size_t size() const { return records_.size(); }
   const std::vector<FrameRecord>& records() const { return records_; }
-  /// Decodes frame i (throws semap::Error naming the file when it is unreadable/inconsistent).
-  virtual Frame load(size_t i) const;
-  /// Decodes only the depth image of frame i (CV_32FC1 metres), validated as load() does.
-  virtual cv::Mat load_depth(size_t i) const;
+  /// Decodes frame i (throws semap::Error naming the file when it is unreadable/inconsistent),
+  /// undistorted. Thread safety: const, may run concurrently with other loads.
+  Frame load(size_t i) const;
+  /// Decodes only the depth image of frame i (CV_32FC1 metres), validated and undistorted as load() does.
+  cv::Mat load_depth(size_t i) const;
   /// Ground-truth trajectory of the sequence (per frame, where known).
   Trajectory ground_truth() const;
   bool has_ground_truth() const;
@@ -42,6 +47,12 @@ class DatasetReader {
   bool has_label_ground_truth() const;
 
  protected:
+  /// The layout's own decoding of frame i / its depth, as stored (before undistortion).
+  virtual Frame decode(size_t i) const;
+  virtual cv::Mat decode_depth(size_t i) const;
+  /// Sets the camera of the stored images; with lens distortion, load() undistorts and
+  /// camera() reports the pinhole model.
+  void set_camera(const CameraModel& stored);
   /// Frame i from its decoded images (metadata from records_[i]); checks the image sizes
   /// against the camera, errors naming `rgb_source`.
   Frame make_frame(size_t i, cv::Mat depth, cv::Mat rgb, const std::filesystem::path& rgb_source) const;
@@ -51,6 +62,9 @@ class DatasetReader {
   std::filesystem::path root_;
   CameraModel camera_;
   std::vector<FrameRecord> records_;
+
+ private:
+  std::shared_ptr<const LensUndistortion> undistortion_;
 };
 
 /// Detects the layout of `root` (dataset.yaml beside the data wins) and opens it: a folder
