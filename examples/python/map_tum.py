@@ -24,6 +24,9 @@ import semap
 
 # TUM RGB-D intrinsics per camera (https://cvg.cit.tum.de/data/datasets/rgbd-dataset/file_formats).
 TUM_INTRINSICS = {1: (517.3, 516.5, 318.6, 255.3), 2: (520.9, 521.0, 325.1, 249.7), 3: (535.4, 539.2, 320.1, 247.6)}
+# Their lens distortion (k1 k2 p1 p2 k3): the Mapper undistorts the frames it is given.
+TUM_DISTORTION = {1: (0.2624, -0.9531, -0.0054, 0.0026, 1.1633), 2: (0.2312, -0.7849, -0.0033, -0.0001, 0.9172),
+                  3: (0, 0, 0, 0, 0)}
 
 
 def read_file_list(path):
@@ -59,8 +62,10 @@ def associate(rgb, depth, max_dt=0.02):
 def camera_for(dataset, depth_scale=5000.0):
     """The TUM camera of the sequence's name (freiburg1/2/3, fr1/2/3); freiburg 1 otherwise."""
     match = re.search(r"(?:freiburg|fr)([123])", dataset.name)
-    fx, fy, cx, cy = TUM_INTRINSICS[int(match.group(1)) if match else 1]
-    return semap.Camera(fx=fx, fy=fy, cx=cx, cy=cy, width=640, height=480, depth_scale=depth_scale)
+    freiburg = int(match.group(1)) if match else 1
+    fx, fy, cx, cy = TUM_INTRINSICS[freiburg]
+    return semap.Camera(fx=fx, fy=fy, cx=cx, cy=cy, width=640, height=480, depth_scale=depth_scale,
+                        distortion=TUM_DISTORTION[freiburg])
 
 
 def main(argv=None):

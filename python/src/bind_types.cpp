@@ -42,10 +42,12 @@ py::array_t<double> vector3(const Eigen::Vector3f& v) {
   return out;
 }
 
-CameraModel make_camera(double fx, double fy, double cx, double cy, int width, int height, double depth_scale) {
+CameraModel make_camera(double fx, double fy, double cx, double cy, int width, int height, double depth_scale,
+                        std::array<double, 5> distortion) {
   CameraModel camera;
   camera.depth = {fx, fy, cx, cy, width, height};
   camera.depth_scale = depth_scale;
+  camera.distortion = distortion;
   validate_camera(camera, "semap.Camera");
   return camera;
 }
@@ -55,7 +57,9 @@ void bind_camera(py::module_& m) {
                           "Pinhole RGB-D camera: depth intrinsics (colour registered to depth) and the raw depth "
                           "units per metre.")
       .def(py::init(&make_camera), py::arg("fx"), py::arg("fy"), py::arg("cx"), py::arg("cy"), py::arg("width"),
-           py::arg("height"), py::arg("depth_scale") = 5000.0)
+           py::arg("height"), py::arg("depth_scale") = 5000.0,
+           py::arg("distortion") = std::array<double, 5>{0, 0, 0, 0, 0},
+           "distortion: k1 k2 p1 p2 k3 (OpenCV order) of the lens; Mapper.add_frame undistorts the frames")
       .def_static("tum", &tum_camera_preset, py::arg("freiburg"), "TUM RGB-D preset (freiburg 1, 2 or 3)")
       .def_property_readonly("fx", [](const CameraModel& c) { return c.depth.fx; })
       .def_property_readonly("fy", [](const CameraModel& c) { return c.depth.fy; })
@@ -64,6 +68,8 @@ void bind_camera(py::module_& m) {
       .def_property_readonly("width", [](const CameraModel& c) { return c.depth.width; })
       .def_property_readonly("height", [](const CameraModel& c) { return c.depth.height; })
       .def_readonly("depth_scale", &CameraModel::depth_scale)
+      .def_property_readonly("distortion", [](const CameraModel& c) { return py::make_tuple(
+          c.distortion[0], c.distortion[1], c.distortion[2], c.distortion[3], c.distortion[4]); })
       .def_property_readonly("has_color_camera", [](const CameraModel& c) { return c.colour.has_value(); })
       .def_property_readonly("color_size", [](const CameraModel& c) {
         return py::make_tuple(c.colour_intrinsics().width, c.colour_intrinsics().height);

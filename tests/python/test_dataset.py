@@ -18,17 +18,29 @@ def test_tum_dataset(tum, tum_path):
     assert "200 frames" in repr(tum)
 
 
+# TUM's published freiburg1 lens (k1 k2 p1 p2 k3): the reader undistorts, reporting the pinhole camera.
+FR1_DISTORTION = np.array([0.2624, -0.9531, -0.0054, 0.0026, 1.1633])
+
+
+def undistorted(image, camera, interpolation):
+    maps = cv2.initUndistortRectifyMap(camera.K, FR1_DISTORTION, None, camera.K, (640, 480), cv2.CV_16SC2)
+    border = cv2.BORDER_CONSTANT if interpolation == cv2.INTER_NEAREST else cv2.BORDER_REPLICATE
+    return cv2.remap(image, *maps, interpolation, borderMode=border, borderValue=0)
+
+
 def test_frames_are_what_opencv_reads(tum):
     f = tum[3]
     assert f.index == 3 and f.timestamp == tum.timestamps[3]
     assert f.rgb.shape == (480, 640, 3) and f.rgb.dtype == np.uint8
     assert f.depth.shape == (480, 640) and f.depth.dtype == np.float32
-    bgr = cv2.imread(f.rgb_path, cv2.IMREAD_COLOR)
+    assert tum.camera.distortion == (0, 0, 0, 0, 0)
+    bgr = undistorted(cv2.imread(f.rgb_path, cv2.IMREAD_COLOR), tum.camera, cv2.INTER_LINEAR)
     np.testing.assert_array_equal(f.bgr, bgr)
     np.testing.assert_array_equal(f.rgb, bgr[..., ::-1])  # RGB order
     raw = cv2.imread(f.depth_path, cv2.IMREAD_UNCHANGED)
     assert raw.dtype == np.uint16
     expected = np.where((raw == 0) | (raw == 65535), 0, raw * np.float32(1 / 5000.0)).astype(np.float32)
+    expected = undistorted(expected, tum.camera, cv2.INTER_NEAREST)
     np.testing.assert_array_equal(f.depth, expected)
     assert f.labels is None and f.instances is None
     pose = f.gt_pose
