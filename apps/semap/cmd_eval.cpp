@@ -107,6 +107,7 @@ int run_objects(const EvalOptions& o) {
     j["gt"] = o.gt;
     j["map"] = o.map;
     j["voxel_size_m"] = o.objects.voxel_size_m;
+    j["match_distance_m"] = o.objects.match_distance_m;
     print_json(j);
     return 0;
   }
@@ -115,7 +116,8 @@ int run_objects(const EvalOptions& o) {
   std::printf("%-14s %6s %6s\n", "class", "GT", "map");
   for (const auto& c : e.counts)
     std::printf("%-14s %6zu %6zu\n", std::string(class_name(c.class_id)).c_str(), c.gt, c.map);
-  std::printf("WOv            %.4f (same class only: %.4f)\n", e.wov, e.wov_same_class);
+  std::printf("WOv            %.4f (same class only: %.4f; voxel-set IoU: %.4f)\n", e.wov, e.wov_same_class,
+              e.wov_voxel);
   for (const auto& m : e.matches)
     std::printf("IoU >= %.2f    precision %.4f  recall %.4f  (%zu matched)\n", m.iou_threshold, m.precision,
                 m.recall, m.true_positives);
@@ -155,7 +157,11 @@ void add_eval_command(CLI::App& app, CommandRunner& run) {
   auto* obj = cmd->add_subcommand("objects", "Objects per class, WOv, precision/recall at 3D IoU 0.25/0.5");
   obj->add_option("--gt", opt->gt, "scene.json or gt_points.ply")->required();
   obj->add_option("--map", opt->map, "objects.json")->required();
-  obj->add_option("--voxel", opt->objects.voxel_size_m, "voxel size of the point-set IoU [m]")
+  obj->add_option("--match-dist", opt->objects.match_distance_m,
+                  "a point lies on a surface within this distance (surface IoU) [m]")
+      ->check(finite_in(1e-4, 1.0))
+      ->capture_default_str();
+  obj->add_option("--voxel", opt->objects.voxel_size_m, "voxel size of the GT weights and of wov_voxel [m]")
       ->check(finite_in(1e-3, 1.0))
       ->capture_default_str();
   obj->add_flag("--json", opt->json, "print one JSON object");

@@ -3,11 +3,14 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
+#include <memory>
 #include <string>
 
 #include "semap/core/error.hpp"
 #include "core/paths.hpp"
+#include "eval/nearest_neighbors.hpp"
 #include "io/json_number.hpp"
 #include "semap/io/ply_io.hpp"
 
@@ -56,6 +59,126 @@ double iou(const VoxelSet& a, const VoxelSet& b) {
   if (a.back() < b.front() || b.back() < a.front()) return 0.0;
   const size_t inter = intersection_size(a, b);
   return static_cast<double>(inter) / static_cast<double>(a.size() + b.size() - inter);
+}
+
+struct Bounds {
+  Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::infinity());
+  Eigen::Vector3f hi = -lo;
+};
+
+Bounds bounds_of(const std::vector<Eigen::Vector3f>& points) {
+  Bounds b;
+  for (const auto& p : points)
+    if (p.allFinite()) {
+      b.lo = b.lo.cwiseMin(p);
+      b.hi = b.hi.cwiseMax(p);
+    }
+  return b;
+}
+
+bool within(const Bounds& a, const Bounds& b, float distance) {
+  return ((a.lo.array() - distance) <= b.hi.array()).all() && ((b.lo.array() - distance) <= a.hi.array()).all();
+}
+
+/// Fraction of `points` within `distance` of the set `index` was built on.
+double fraction_within(const eval_detail::NearestNeighborIndex& index, const std::vector<Eigen::Vector3f>& points,
+                       float distance) {
+  if (points.empty()) return 0.0;
+  size_t near = 0;
+  for (const auto& hit : index.nearest_all(points)) near += hit.distance <= distance ? 1 : 0;
+  return static_cast<double>(near) / static_cast<double>(points.size());
+}
+
+struct SurfaceOverlap {
+  double precision = 0.0, recall = 0.0;
+  double iou() const {
+    if (precision <= 0.0 || recall <= 0.0) return 0.0;
+    return precision * recall / (precision + recall - precision * recall);
+  }
+};
+
+std::vector<Eigen::Vector3f> finite_points(const std::vector<Eigen::Vector3f>& points) {
+  std::vector<Eigen::Vector3f> out;
+  out.reserve(points.size());
+  for (const auto& p : points)
+    if (p.allFinite()) out.push_back(p);
+  return out;
+}
+
+/// One side's objects ready for distance queries (finite points, k-d tree, box).
+struct IndexedObjects {
+  std::vector<std::vector<Eigen::Vector3f>> points;
+  std::vector<std::unique_ptr<eval_detail::NearestNeighborIndex>> index;
+  std::vector<Bounds> bounds;
+  explicit IndexedObjects(const std::vector<EvalObject>& objects) {
+    points.reserve(objects.size());  // the indices keep references into `points`
+    for (const auto& o : objects) {
+      points.push_back(finite_points(o.points));
+      index.push_back(std::make_unique<eval_detail::NearestNeighborIndex>(points.back()));
+      bounds.push_back(bounds_of(points.back()));
+    }
+  }
+};
+
+/// Precision and recall of every (GT, map) pair at distance d (header), row-major by GT; pairs
+/// whose boxes are farther apart than d are disjoint and not searched. Non-finite map points
+/// count against precision.
+std::vector<SurfaceOverlap> surface_overlaps(const std::vector<EvalObject>& gt, const std::vector<EvalObject>& map,
+                                             float distance) {
+  const IndexedObjects g(gt), m(map);
+  std::vector<SurfaceOverlap> overlaps(gt.size() * map.size());
+  for (size_t i = 0; i < gt.size(); ++i)
+    for (size_t j = 0; j < map.size(); ++j) {
+      if (!within(g.bounds[i], m.bounds[j], distance)) continue;
+      auto& o = overlaps[i * map.size() + j];
+      o.recall = fraction_within(*m.index[j], g.points[i], distance);
+      if (o.recall > 0.0 && !map[j].points.empty())
+        o.precision = fraction_within(*g.index[i], m.points[j], distance) *
+                      static_cast<double>(m.points[j].size()) / static_cast<double>(map[j].points.size());
+    }
+  return overlaps;
+}
+
+std::vector<ObjectClassCount> count_per_class(const std::vector<EvalObject>& gt, const std::vector<EvalObject>& map) {
+  std::map<ClassId, ObjectClassCount> counts;
+  for (const auto& g : gt) ++counts[g.class_id].gt;
+  for (const auto& m : map) ++counts[m.class_id].map;
+  std::vector<ObjectClassCount> out;
+  for (auto& [c, count] : counts) {
+    count.class_id = c;
+    out.push_back(count);
+  }
+  return out;
+}
+
+/// Greedy one-to-one same-class matching by descending IoU, per threshold (header).
+std::vector<ObjectMatchStats> match_instances(const std::vector<EvalObject>& gt, const std::vector<EvalObject>& map,
+                                              const std::vector<double>& ious, const std::vector<double>& thresholds) {
+  struct Candidate { double iou; size_t i, j; };
+  std::vector<Candidate> candidates;
+  for (size_t i = 0; i < gt.size(); ++i)
+    for (size_t j = 0; j < map.size(); ++j)
+      if (gt[i].class_id == map[j].class_id && ious[i * map.size() + j] > 0.0)
+        candidates.push_back({ious[i * map.size() + j], i, j});
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [](const Candidate& a, const Candidate& b) { return a.iou > b.iou; });
+  std::vector<ObjectMatchStats> out;
+  for (double threshold : thresholds) {
+    ObjectMatchStats stats;
+    stats.iou_threshold = threshold;
+    std::vector<bool> gt_used(gt.size(), false), map_used(map.size(), false);
+    for (const auto& c : candidates) {
+      if (c.iou < threshold) break;
+      if (gt_used[c.i] || map_used[c.j]) continue;
+      gt_used[c.i] = map_used[c.j] = true;
+      ++stats.true_positives;
+    }
+    const double tp = static_cast<double>(stats.true_positives);
+    stats.precision = map.empty() ? 0.0 : tp / static_cast<double>(map.size());
+    stats.recall = gt.empty() ? 0.0 : tp / static_cast<double>(gt.size());
+    out.push_back(stats);
+  }
+  return out;
 }
 
 nlohmann::json read_json(const std::filesystem::path& path) {
@@ -129,76 +252,48 @@ void sample_box_surface(const nlohmann::json& obb, double spacing, std::vector<E
 ObjectEvaluation evaluate_objects(const std::vector<EvalObject>& gt, const std::vector<EvalObject>& map,
                                   const ObjectEvalOptions& options) {
   if (!(options.voxel_size_m > 0.0)) throw Error("object eval", "voxel size must be > 0");
+  if (!(options.match_distance_m > 0.0)) throw Error("object eval", "match distance must be > 0");
   ObjectEvaluation result;
   result.gt_objects = gt.size();
   result.map_objects = map.size();
-
-  std::map<ClassId, ObjectClassCount> counts;
-  for (const auto& g : gt) ++counts[g.class_id].gt;
-  for (const auto& m : map) ++counts[m.class_id].map;
-  for (auto& [c, count] : counts) {
-    count.class_id = c;
-    result.counts.push_back(count);
-  }
+  result.counts = count_per_class(gt, map);
 
   std::vector<VoxelSet> gt_voxels, map_voxels;
   for (const auto& g : gt) gt_voxels.push_back(voxelize(g.points, options.voxel_size_m));
   for (const auto& m : map) map_voxels.push_back(voxelize(m.points, options.voxel_size_m));
+  const auto overlaps = surface_overlaps(gt, map, static_cast<float>(options.match_distance_m));
+  std::vector<double> ious(overlaps.size());
+  for (size_t k = 0; k < overlaps.size(); ++k) ious[k] = overlaps[k].iou();
 
-  std::vector<double> ious(gt.size() * map.size(), 0.0);
-  for (size_t i = 0; i < gt.size(); ++i)
-    for (size_t j = 0; j < map.size(); ++j) ious[i * map.size() + j] = iou(gt_voxels[i], map_voxels[j]);
-
-  // METHODS.md C6: WOv weighted by GT voxel count.
-  double weight_sum = 0.0, wov_sum = 0.0, wov_same_sum = 0.0;
+  // METHODS.md C6: WOv weighted by GT surface area (occupied voxels).
+  double weight_sum = 0.0, wov_sum = 0.0, wov_same_sum = 0.0, wov_voxel_sum = 0.0;
   for (size_t i = 0; i < gt.size(); ++i) {
-    GtObjectScore score;
-    score.gt_id = gt[i].id;
-    score.class_id = gt[i].class_id;
-    score.voxels = gt_voxels[i].size();
+    GtObjectScore score{.gt_id = gt[i].id, .class_id = gt[i].class_id, .voxels = gt_voxels[i].size()};
+    double best_voxel_iou = 0.0;
     for (size_t j = 0; j < map.size(); ++j) {
       const double v = ious[i * map.size() + j];
       if (v > score.best_iou) {
         score.best_iou = v;
         score.best_map_id = map[j].id;
+        score.best_precision = overlaps[i * map.size() + j].precision;
+        score.best_recall = overlaps[i * map.size() + j].recall;
       }
       if (map[j].class_id == gt[i].class_id) score.best_iou_same_class = std::max(score.best_iou_same_class, v);
+      best_voxel_iou = std::max(best_voxel_iou, iou(gt_voxels[i], map_voxels[j]));
     }
     const double w = static_cast<double>(score.voxels);
     weight_sum += w;
     wov_sum += w * score.best_iou;
     wov_same_sum += w * score.best_iou_same_class;
+    wov_voxel_sum += w * best_voxel_iou;
     result.per_gt.push_back(score);
   }
   if (weight_sum > 0) {
     result.wov = wov_sum / weight_sum;
     result.wov_same_class = wov_same_sum / weight_sum;
+    result.wov_voxel = wov_voxel_sum / weight_sum;
   }
-
-  // Greedy one-to-one same-class matching by descending IoU, per threshold.
-  struct Candidate { double iou; size_t i, j; };
-  std::vector<Candidate> candidates;
-  for (size_t i = 0; i < gt.size(); ++i)
-    for (size_t j = 0; j < map.size(); ++j)
-      if (gt[i].class_id == map[j].class_id && ious[i * map.size() + j] > 0.0)
-        candidates.push_back({ious[i * map.size() + j], i, j});
-  std::stable_sort(candidates.begin(), candidates.end(),
-                   [](const Candidate& a, const Candidate& b) { return a.iou > b.iou; });
-  for (double threshold : options.iou_thresholds) {
-    ObjectMatchStats stats;
-    stats.iou_threshold = threshold;
-    std::vector<bool> gt_used(gt.size(), false), map_used(map.size(), false);
-    for (const auto& c : candidates) {
-      if (c.iou < threshold) break;
-      if (gt_used[c.i] || map_used[c.j]) continue;
-      gt_used[c.i] = map_used[c.j] = true;
-      ++stats.true_positives;
-    }
-    const double tp = static_cast<double>(stats.true_positives);
-    stats.precision = map.empty() ? 0.0 : tp / static_cast<double>(map.size());
-    stats.recall = gt.empty() ? 0.0 : tp / static_cast<double>(gt.size());
-    result.matches.push_back(stats);
-  }
+  result.matches = match_instances(gt, map, ious, options.iou_thresholds);
   return result;
 }
 
@@ -320,9 +415,10 @@ nlohmann::json to_json(const ObjectEvaluation& e) {
   for (const auto& g : e.per_gt)
     per_gt.push_back({{"gt_id", g.gt_id}, {"class", std::string(class_name(g.class_id))},
                       {"voxels", g.voxels}, {"best_iou", g.best_iou}, {"best_map_id", g.best_map_id},
+                      {"best_precision", g.best_precision}, {"best_recall", g.best_recall},
                       {"best_iou_same_class", g.best_iou_same_class}});
   return {{"gt_objects", e.gt_objects}, {"map_objects", e.map_objects}, {"wov", e.wov},
-          {"wov_same_class", e.wov_same_class}, {"counts", counts}, {"matches", matches},
+          {"wov_same_class", e.wov_same_class}, {"wov_voxel", e.wov_voxel}, {"counts", counts}, {"matches", matches},
           {"per_gt", per_gt}};
 }
 

@@ -5,6 +5,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -152,13 +153,33 @@ PinholeIntrinsics intrinsics_from(const rb::CameraInfoData& info, const rb::Imag
                          " but its images are " + std::to_string(image.width) + "x" + std::to_string(image.height));
   k.width = static_cast<int>(image.width);
   k.height = static_cast<int>(image.height);
-  for (double d : info.D)
-    if (d != 0) {
-      spdlog::warn("{}: {} has lens distortion ({}); semap uses the images as they are (pinhole)", bag.string(),
-                   info_topic, info.distortion_model);
-      break;
-    }
   return k;
+}
+
+/// The CameraInfo's lens distortion in OpenCV order (k1 k2 p1 p2 k3), undistorted where frames
+/// enter (DatasetReader::load). plumb_bob is exact; rational_polynomial's k4..k6 are not
+/// modelled (warned); another model with a non-zero D (equidistant fisheye) keeps the images
+/// as they are (warned).
+std::array<double, 5> distortion_from(const rb::CameraInfoData& info, const fs::path& bag,
+                                      const std::string& info_topic) {
+  std::array<double, 5> d{0, 0, 0, 0, 0};
+  const bool any = std::any_of(info.D.begin(), info.D.end(), [](double v) { return v != 0; });
+  if (!any) return d;
+  for (double v : info.D)
+    if (!std::isfinite(v)) throw Error(bag, info_topic + ": NaN or Inf in D");
+  const bool plumb_bob = info.distortion_model == "plumb_bob" && info.D.size() == 5;
+  const bool rational = info.distortion_model == "rational_polynomial" && info.D.size() == 8;
+  if (!plumb_bob && !rational) {
+    spdlog::warn("{}: {} has lens distortion model '{}' with {} coefficients; semap undistorts plumb_bob and "
+                 "rational_polynomial only and uses these images as they are (pinhole)",
+                 bag.string(), info_topic, info.distortion_model, info.D.size());
+    return d;
+  }
+  std::copy_n(info.D.begin(), 5, d.begin());
+  if (rational && std::any_of(info.D.begin() + 5, info.D.end(), [](double v) { return v != 0; }))
+    spdlog::warn("{}: {}: rational_polynomial k4..k6 are not modelled; undistorting with k1 k2 p1 p2 k3", bag.string(),
+                 info_topic);
+  return d;
 }
 
 /// One image message of a stream, in time order.
@@ -363,9 +384,12 @@ CameraModel bag_camera(const rb::Bag& bag, const std::vector<rb::Topic>& topics,
   camera.depth_scale = kRosDepthScale;
   if (!depth_info) spdlog::warn("{}: no CameraInfo for {}; using {} (depth registered to colour)", path.string(), depth.name, *rgb_info);
   const std::string depth_info_name = depth_info ? *depth_info : *rgb_info;
-  camera.depth = intrinsics_from(bag.first_camera_info(depth_info_name), depth_meta, path, depth_info_name);
+  const rb::CameraInfoData depth_camera_info = bag.first_camera_info(depth_info_name);
+  camera.depth = intrinsics_from(depth_camera_info, depth_meta, path, depth_info_name);
+  camera.distortion = distortion_from(depth_camera_info, path, depth_info_name);
   const std::string rgb_info_name = rgb_info ? *rgb_info : *depth_info;
-  PinholeIntrinsics colour = intrinsics_from(bag.first_camera_info(rgb_info_name), rgb_meta, path, rgb_info_name);
+  const rb::CameraInfoData rgb_camera_info = bag.first_camera_info(rgb_info_name);
+  PinholeIntrinsics colour = intrinsics_from(rgb_camera_info, rgb_meta, path, rgb_info_name);
   if (!(colour == camera.depth)) {
     if (!rgb_info) throw Error(path, "colour images are " + std::to_string(rgb_meta.width) + "x" + std::to_string(rgb_meta.height) +
                                          ", depth images " + std::to_string(depth_meta.width) + "x" + std::to_string(depth_meta.height) +
@@ -373,7 +397,10 @@ CameraModel bag_camera(const rb::Bag& bag, const std::vector<rb::Topic>& topics,
     spdlog::warn("{}: colour and depth cameras differ; registering colour to depth with an identity extrinsic "
                  "(the bag's /tf is not read)", path.string());
     camera.colour = CameraModel::ColourCamera{colour, Pose::Identity()};
+    if (distortion_from(rgb_camera_info, path, rgb_info_name) != std::array<double, 5>{0, 0, 0, 0, 0})
+      spdlog::warn("{}: {} has lens distortion; only the depth camera's is corrected", path.string(), rgb_info_name);
   }
+  validate_camera(camera, path.string());  // before the undistortion maps are built from it
   return camera;
 }
 

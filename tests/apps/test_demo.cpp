@@ -12,12 +12,14 @@
 namespace semap::test {
 namespace {
 
-// Bounds with a margin over the figures measured by this test (2026-12-03, the closing printf):
-// ATE 0.16 cm, mIoU 0.943 (compact vote 0.863), WOv 0.608, 12 objects for 12 (0.582 and 11 while
-// C5's containment test used raw boxes: the two touching chairs merged; 0.484 before object
-// points were projected onto the fused surface).
+// Bounds with a margin over the figures measured by this test (2026-12-04, the closing printf):
+// ATE 0.16 cm, mIoU 0.943 (compact vote 0.863), WOv 0.850 by surface IoU at 2 cm (issue 17's
+// target 0.75), 12 objects for 12. The voxel-set figure of the same map is 0.607 (0.582 and 11
+// objects while C5's containment test used raw boxes; 0.484 before object points were projected
+// onto the fused surface): kept as a floor so that the object points do not drift off the surface.
 constexpr double kDemoMaxAteM = 0.01;
-constexpr double kDemoMinWov = 0.58;
+constexpr double kDemoMinWov = 0.75;
+constexpr double kDemoMinVoxelWov = 0.58;
 
 nlohmann::json run_demo(const TempDir& dir, const std::string& name, const std::string& config_yaml = {}) {
   std::string command = shell_quote(semap_executable().string()) + " demo --out " + shell_quote((dir / name).string());
@@ -44,15 +46,17 @@ TEST(Demo, FiguresOfTheReadmeHoldAndTheBayesianLayerBeatsTheCompactVote) {
   ASSERT_TRUE(bayes.is_object() && compact.is_object()) << "no report.json";
   const double ate_m = figure(bayes, "ate", "rmse_m"), miou = figure(bayes, "semantic", "miou");
   const double miou_compact = figure(compact, "semantic", "miou"), wov = figure(bayes, "objects", "wov");
+  const double wov_voxel = figure(bayes, "objects", "wov_voxel");
   const int gt_objects = bayes["evaluation"]["objects"]["gt_objects"].get<int>();
   const int map_objects = bayes["evaluation"]["objects"]["map_objects"].get<int>();
-  std::printf("[demo] ATE %.2f cm, mIoU %.3f (compact vote %.3f), WOv %.3f, objects %d (gt %d)\n", ate_m * 100,
-              miou, miou_compact, wov, map_objects, gt_objects);
+  std::printf("[demo] ATE %.2f cm, mIoU %.3f (compact vote %.3f), WOv %.3f (voxel-set %.3f), objects %d (gt %d)\n",
+              ate_m * 100, miou, miou_compact, wov, wov_voxel, map_objects, gt_objects);
   // README: mIoU 0.943 Bayesian / 0.863 compact.
   EXPECT_LE(ate_m, kDemoMaxAteM);
   EXPECT_GE(miou, 0.92);
   EXPECT_GE(miou - miou_compact, 0.04) << "the default label rule was chosen by this margin";
   EXPECT_GE(wov, kDemoMinWov);
+  EXPECT_GE(wov_voxel, kDemoMinVoxelWov);
   EXPECT_LE(std::abs(map_objects - gt_objects), 1);
 }
 

@@ -2,7 +2,9 @@
 //   semap synth --frames 300 --seed 1 --objects 10
 //   semap run D --segmenter groundtruth --poses groundtruth
 //   semap eval objects --gt D/gt_points.ply --map O/objects.json --json
-// -> exact object count per class and WOv >= 0.85 (METHODS.md C6).
+// -> exact object count per class and WOv >= 0.85 (METHODS.md C6). Measured 2026-12-04: WOv 0.981
+// by surface IoU at 2 cm (0.897 by the grid-dependent voxel sets); the bound keeps a margin
+// under the measured figure.
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
@@ -25,11 +27,11 @@ TEST(ObjectsDoneWhen, GroundTruthMasksGiveExactCountsAndWov) {
                   (out / "objects.json").string() + " --json 2>/dev/null");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const auto j = nlohmann::json::parse(r.output);
-  std::cout << "WOv " << j["wov"] << "\n";
+  std::cout << "WOv " << j["wov"] << " (voxel-set " << j["wov_voxel"] << ")\n";
   for (const auto& c : j["counts"]) {
     EXPECT_EQ(c["gt"], c["map"]) << c.dump();
   }
-  EXPECT_GE(j["wov"].get<double>(), 0.85);
+  EXPECT_GE(j["wov"].get<double>(), 0.93);
 }
 
 }  // namespace

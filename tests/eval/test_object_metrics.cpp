@@ -1,6 +1,7 @@
 // Object metrics (WOv, counts, P/R) on ground-truth-derived object maps.
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <random>
 
 #include <nlohmann/json.hpp>
@@ -100,6 +101,48 @@ TEST(ObjectMetrics, PerfectMapOfGridAlignedFacesScoresOne) {
   for (const auto& g : e.per_gt) EXPECT_GT(g.best_iou, 0.98) << g.gt_id;
 }
 
+// A map a few millimetres off the truth (depth noise, a fused surface 3 mm high) is the same
+// surface at the map's resolution and scores 1; the voxel-set IoU (wov_voxel) moves half a
+// horizontal face into the next voxel layer when the truth lies just under a voxel border.
+TEST(ObjectMetrics, SubVoxelOffsetKeepsTheSurfaceIouButNotTheVoxelIou) {
+  PointCloud cloud;
+  add_box(cloud, {2.0f, 0.0f, 0.40f}, {3.2f, 0.8f, 0.41f}, kTable, 1);  // a 1 cm thin table top
+  const auto gt = gt_objects_from_points(cloud);
+  // kGridPhase puts a z border at (k - 0.4127) * 2 cm; move the top to 1 mm under one, the
+  // map 3 mm higher.
+  const float border = (21 - 0.4127f) * 0.02f, shift = border - 0.001f - gt[0].points.front().z();
+  auto truth = gt, map = gt;
+  for (auto& p : truth[0].points) p.z() += shift;
+  for (auto& p : map[0].points) p.z() += shift + 0.003f;
+  const ObjectEvaluation e = evaluate_objects(truth, map);
+  EXPECT_DOUBLE_EQ(e.wov, 1.0);
+  EXPECT_LT(e.wov_voxel, 0.8);
+}
+
+// Map points beyond the match distance of the object count against precision; unmapped parts
+// of the object against recall.
+TEST(ObjectMetrics, StrayPointsCostPrecisionAndMissingPartsRecall) {
+  const auto gt = gt_objects_from_points(make_gt_points());
+  EvalObject stray = gt[2];
+  for (const auto& p : gt[2].points) stray.points.push_back(p + Eigen::Vector3f(0.0f, 0.0f, 1.0f));
+  stray.points.push_back(Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN()));
+  const ObjectEvaluation e = evaluate_objects({gt[2]}, {stray});
+  const double n = static_cast<double>(gt[2].points.size());
+  // A copy 1 m above the table and one non-finite point: n of 2n + 1 points are on it.
+  EXPECT_NEAR(e.per_gt[0].best_precision, n / (2 * n + 1), 1e-12);
+  EXPECT_DOUBLE_EQ(e.per_gt[0].best_recall, 1.0);
+  EXPECT_NEAR(e.per_gt[0].best_iou, e.per_gt[0].best_precision, 1e-12);
+
+  ObjectEvalOptions strict;
+  strict.match_distance_m = 0.005;  // the 1 cm sampling of a shifted copy is > 5 mm away
+  EvalObject shifted = gt[2];
+  for (auto& p : shifted.points) p += Eigen::Vector3f(0.005f, 0.005f, 0.0f);
+  EXPECT_LT(evaluate_objects({gt[2]}, {shifted}, strict).wov, 0.5);
+  EXPECT_DOUBLE_EQ(evaluate_objects({gt[2]}, {shifted}).wov, 1.0);
+  strict.match_distance_m = 0.0;
+  EXPECT_THROW(evaluate_objects({gt[2]}, {shifted}, strict), Error);
+}
+
 TEST(ObjectMetrics, DroppedObject) {
   const auto gt = gt_objects_from_points(make_gt_points());
   auto map = gt;
@@ -122,9 +165,13 @@ TEST(ObjectMetrics, MergedNeighbours) {
   map[0].points.insert(map[0].points.end(), gt[1].points.begin(), gt[1].points.end());  // chairs merged
   const ObjectEvaluation e = evaluate_objects(gt, map);
   const double g1 = static_cast<double>(e.per_gt[0].voxels), g2 = static_cast<double>(e.per_gt[1].voxels);
-  const double iou1 = g1 / (g1 + g2), iou2 = g2 / (g1 + g2);  // disjoint voxel sets
+  // Recall 1 for both chairs; precision = each chair's share of the merged points (10 cm apart).
+  const double n1 = static_cast<double>(gt[0].points.size()), n2 = static_cast<double>(gt[1].points.size());
+  const double iou1 = n1 / (n1 + n2), iou2 = n2 / (n1 + n2);
   EXPECT_NEAR(e.per_gt[0].best_iou, iou1, 1e-12);
   EXPECT_NEAR(e.per_gt[1].best_iou, iou2, 1e-12);
+  EXPECT_DOUBLE_EQ(e.per_gt[1].best_recall, 1.0);
+  EXPECT_NEAR(e.per_gt[1].best_precision, iou2, 1e-12);
   double total = 0;
   for (const auto& g : e.per_gt) total += static_cast<double>(g.voxels);
   EXPECT_NEAR(e.wov, (total - g1 - g2 + g1 * iou1 + g2 * iou2) / total, 1e-12);

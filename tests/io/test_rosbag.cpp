@@ -2,10 +2,12 @@
 // ../shared/data/tum_fr1_rpy must read back frame for frame like the folder and track to the
 // same trajectory; every supported encoding decodes to the known values; broken bags give one
 // error line naming the file.
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstring>
 #include <iostream>
+#include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -72,24 +74,29 @@ RosImage depth_message(const std::string& topic, RosStamp stamp, const cv::Mat& 
   return m;
 }
 
-RosCameraInfo info_message(const std::string& topic, RosStamp stamp, const PinholeIntrinsics& k) {
-  RosCameraInfo info{topic, stamp, uint32_t(k.width), uint32_t(k.height), {}, {0, 0, 0, 0, 0}};
+RosCameraInfo info_message(const std::string& topic, RosStamp stamp, const PinholeIntrinsics& k,
+                           const std::array<double, 5>& distortion = {0, 0, 0, 0, 0}) {
+  RosCameraInfo info{topic, stamp, uint32_t(k.width), uint32_t(k.height), {}, {distortion.begin(), distortion.end()}};
   info.K = {k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1};
   return info;
 }
 
-/// The first `frames` frames of the TUM folder as a bag laid out like TUM's own: rgb8 colour,
-/// 32FC1 depth (each with its own timestamp from the file names), camera_info, plus an IMU topic.
+/// The first `frames` frames of the TUM fr1 folder as a bag laid out like TUM's own: the raw
+/// (distorted) images, rgb8 colour and 32FC1 depth (each with its own timestamp from the file
+/// names), camera_info with fr1's plumb_bob distortion, plus an IMU topic.
 void write_tum_bag(const DatasetReader& folder, size_t frames, const fs::path& bag_path, bool lz4) {
   BagWriter bag(bag_path, lz4);
+  const CameraModel lens = tum_camera_preset(1);
   for (size_t i = 0; i < frames; ++i) {
     const Frame f = folder.load(i);
+    const cv::Mat raw_rgb = cv::imread(f.rgb_path, cv::IMREAD_COLOR);
+    const cv::Mat raw_depth_m = read_depth_image(f.depth_path, lens.depth_scale);
     const RosStamp rgb_t = stamp_from_text(fs::path(f.rgb_path).stem().string());
     const RosStamp depth_t = stamp_from_text(fs::path(f.depth_path).stem().string());
-    bag.write(colour_message("/camera/rgb/image_color", rgb_t, f.rgb, "rgb8"));
-    bag.write(info_message("/camera/rgb/camera_info", rgb_t, folder.camera().depth));
-    bag.write(depth_message("/camera/depth/image", depth_t, f.depth, "32FC1"));
-    bag.write(info_message("/camera/depth/camera_info", depth_t, folder.camera().depth));
+    bag.write(colour_message("/camera/rgb/image_color", rgb_t, raw_rgb, "rgb8"));
+    bag.write(info_message("/camera/rgb/camera_info", rgb_t, lens.depth, lens.distortion));
+    bag.write(depth_message("/camera/depth/image", depth_t, raw_depth_m, "32FC1"));
+    bag.write(info_message("/camera/depth/camera_info", depth_t, lens.depth, lens.distortion));
     bag.write_imu("/imu", rgb_t);
   }
 }
@@ -149,6 +156,7 @@ TEST_F(TumBag, ReadsBackFrameForFrameLikeTheFolder) {
   EXPECT_EQ(bag->format(), "rosbag");
   ASSERT_EQ(bag->size(), kSliceFrames);
   EXPECT_EQ(bag->camera().depth, folder_->camera().depth);
+  EXPECT_FALSE(bag->camera().has_distortion()) << "the bag's plumb_bob D is undistorted on load";
   EXPECT_FALSE(bag->camera().colour.has_value());
   size_t identical_rgb = 0, identical_depth = 0, same_time = 0, same_gt = 0;
   for (size_t i = 0; i < kSliceFrames; ++i) {
@@ -407,6 +415,36 @@ TEST_F(BagEncodings, TopicsChosenOrNamed) {
     }
   }
   EXPECT_TRUE(throws_naming([&] { open_dataset(both); }, "no sensor_msgs/CameraInfo"));
+}
+
+// The depth CameraInfo's lens distortion is undistorted on load (plumb_bob; TUM's own bags carry
+// fr1's); a model semap does not undistort keeps the images (warned); a broken D is one error.
+TEST_F(BagEncodings, CameraInfoDistortion) {
+  const auto write_bag = [&](const std::string& name, const std::string& model, const std::vector<double>& d) {
+    const fs::path path = dir_ / (name + ".bag");
+    BagWriter bag(path);
+    for (uint32_t n = 0; n < 3; ++n) {
+      const RosStamp t{1000 + n, 0};
+      bag.write(colour_message("/cam/color/image_raw", t, small_.bgr, "bgr8"));
+      bag.write(depth_message("/cam/depth/image_raw", t, small_.depth_m, "16UC1"));
+      RosCameraInfo info = info_message("/cam/depth/camera_info", t, small_.k);
+      info.D = d;
+      info.distortion_model = model;
+      bag.write(info);
+    }
+    return path;
+  };
+  const auto plumb_bob = open_dataset(write_bag("plumb_bob", "plumb_bob", {0.26, -0.95, -0.005, 0.003, 1.16}));
+  EXPECT_FALSE(plumb_bob->camera().has_distortion());
+  EXPECT_EQ(plumb_bob->camera().depth, small_.k);
+  EXPECT_GT(mean_abs_diff(plumb_bob->load(1).rgb, small_.bgr), 1.0) << "pixels moved by the undistortion";
+  const auto fisheye = open_dataset(write_bag("equidistant", "equidistant", {0.1, 0.01, 0, 0}));
+  EXPECT_TRUE(same_pixels(fisheye->load(1).rgb, small_.bgr)) << "an unsupported model keeps the images";
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const fs::path broken = write_bag("nan", "plumb_bob", {nan, 0, 0, 0, 0});
+  EXPECT_TRUE(throws_naming([&] { open_dataset(broken); }, broken.string() + ": /cam/depth/camera_info: NaN or Inf in D"));
+  const fs::path huge = write_bag("huge", "plumb_bob", {50, 0, 0, 0, 0});
+  EXPECT_TRUE(throws_naming([&] { open_dataset(huge); }, "distortion coefficient 50"));
 }
 
 TEST_F(BagEncodings, CorruptAndTruncatedBags) {

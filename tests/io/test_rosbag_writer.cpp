@@ -55,7 +55,7 @@ void BagWriter::write(const RosCameraInfo& info) {
   msg.width = info.width;
   msg.height = info.height;
   for (size_t k = 0; k < 9; ++k) msg.K[k] = info.K[k];
-  msg.distortion_model = "plumb_bob";
+  msg.distortion_model = info.distortion_model;
   msg.D = info.D;
   impl_->bag.write(info.topic, msg.header.stamp, msg);
 }

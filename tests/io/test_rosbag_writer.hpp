@@ -36,6 +36,7 @@ struct RosCameraInfo {
   uint32_t width = 0, height = 0;
   std::array<double, 9> K{};
   std::vector<double> D;
+  std::string distortion_model = "plumb_bob";
 };
 
 class BagWriter {

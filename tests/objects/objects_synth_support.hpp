@@ -1,6 +1,7 @@
 #pragma once
 // Shared by the object-map tests on the synthetic world: ground-truth segmentation results,
-// running the mapper over a dataset, per-class counts and WOv (METHODS.md C6) by voxel IoU.
+// running the mapper over a dataset, per-class counts and WOv (METHODS.md C6, the library's
+// evaluation).
 #include <filesystem>
 #include <map>
 #include <cstdlib>
@@ -15,6 +16,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "semap/core/labels.hpp"
+#include "semap/eval/object_metrics.hpp"
 #include "semap/io/dataset.hpp"
 #include "semap/io/ply_io.hpp"
 #include "objects/object_mapper.hpp"
@@ -142,39 +144,23 @@ inline GtObjects load_gt_objects(const std::filesystem::path& dataset, size_t mi
   return gt;
 }
 
-inline std::unordered_set<uint64_t> voxelise(const std::vector<Eigen::Vector3f>& points, double voxel) {
-  std::unordered_set<uint64_t> keys;
-  for (const auto& p : points) {
-    auto cell = [&](float x) { return static_cast<uint64_t>(static_cast<int64_t>(std::floor(x / voxel)) + (1 << 20)) & 0x1FFFFF; };
-    keys.insert((cell(p.x()) << 42) | (cell(p.y()) << 21) | cell(p.z()));
-  }
-  return keys;
-}
-
-/// WOv = sum_i |G_i| max_j IoU(G_i, S_j) / sum_i |G_i| with IoU over occupied voxels (C6).
-inline double weighted_overlap(const GtObjects& gt, const std::vector<ObjectInstance>& predicted, double voxel = 0.03) {
-  std::vector<std::unordered_set<uint64_t>> pred;
-  for (const auto& inst : predicted) pred.push_back(voxelise(inst.points, voxel));
-  double num = 0, den = 0;
-  for (const auto& [inst, pts] : gt.points) {
-    const auto g = voxelise(pts, voxel);
-    double best = 0, best_precision = 0, best_recall = 0;
-    for (const auto& s : pred) {
-      size_t inter = 0;
-      for (uint64_t k : g) inter += s.count(k);
-      const double uni = static_cast<double>(g.size() + s.size() - inter);
-      if (uni > 0 && inter / uni > best) {
-        best = inter / uni;
-        best_precision = static_cast<double>(inter) / s.size();
-        best_recall = static_cast<double>(inter) / g.size();
-      }
-    }
-    if (std::getenv("SEMAP_OBJECTS_DEBUG"))
-      std::cout << "gt " << inst << " " << class_name(gt.classes.at(inst)) << " voxels " << g.size() << " IoU " << best << " precision " << best_precision << " recall " << best_recall << "\n";
-    num += g.size() * best;
-    den += g.size();
-  }
-  return den > 0 ? num / den : 0.0;
+/// WOv (METHODS.md C6) of the predicted instances by the library's object evaluation
+/// (semap/eval/object_metrics.hpp: surface IoU within `distance_m`, weights on a grid of the
+/// same size). SEMAP_OBJECTS_DEBUG prints every GT object's best match.
+inline double weighted_overlap(const GtObjects& gt, const std::vector<ObjectInstance>& predicted,
+                               double distance_m = 0.03) {
+  std::vector<EvalObject> truth, map;
+  for (const auto& [inst, pts] : gt.points) truth.push_back({inst, gt.classes.at(inst), pts});
+  for (size_t k = 0; k < predicted.size(); ++k)
+    map.push_back({static_cast<uint32_t>(k), predicted[k].class_id(), predicted[k].points});
+  ObjectEvalOptions options;
+  options.match_distance_m = options.voxel_size_m = distance_m;
+  const ObjectEvaluation e = evaluate_objects(truth, map, options);
+  if (std::getenv("SEMAP_OBJECTS_DEBUG"))
+    for (const auto& g : e.per_gt)
+      std::cout << "gt " << g.gt_id << " " << class_name(g.class_id) << " voxels " << g.voxels << " IoU "
+                << g.best_iou << " precision " << g.best_precision << " recall " << g.best_recall << "\n";
+  return e.wov;
 }
 
 inline std::map<std::string, int> counts_per_class(const std::vector<ObjectInstance>& instances) {

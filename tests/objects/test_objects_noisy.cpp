@@ -171,13 +171,14 @@ TEST(ObjectsNoisy, OptimisationAndSupervoxelsImproveNoisyMaps) {
   // (2). Deletion removes the split fragments (seen a few times, C5 deletion rule); merging
   // removes the drift duplicates (STABLE, co-associated, inside each other's box, same class).
   // Its cost: the two touching chairs, merged by the noise's mask merges in some frames, end as
-  // one. WOv (true poses, no splits): supervoxel 0.764 (no optimisation 0.818), back-projection
-  // 0.704 (0.786). The C5 rules themselves: unit tests DeletionRule, MergeRule...
+  // one. WOv (true poses, no splits; surface IoU at 3 cm, 2026-12-04): supervoxel 0.898 (no
+  // optimisation 0.941), back-projection 0.867 (0.930); by voxel sets (earlier versions) 0.764
+  // (0.818) and 0.704 (0.786). The C5 rules themselves: unit tests DeletionRule, MergeRule...
   EXPECT_GE(totals["no optimisation"], truth_total + 10) << "the noise must make duplicates for C5 to remove";
   EXPECT_LT(totals["merge only"], totals["no optimisation"]) << "merging removes duplicates";
   EXPECT_LT(errors["both"], errors["delete only"]) << "merging removes what deletion leaves";
   EXPECT_LE(errors["both"], 3);  // measured 2
   EXPECT_LT(errors["delete only"], errors["no optimisation"]) << "deletion removes the split fragments";
   EXPECT_GT(wov_supervoxel, wov_backprojection);
-  EXPECT_GE(wov_supervoxel, 0.74);  // measured 0.764
+  EXPECT_GE(wov_supervoxel, 0.86);  // measured 0.898
 }

@@ -22,7 +22,7 @@ constexpr double kCompletenessTolerance = 0.01;   // fraction of GT surface with
 constexpr double kSurfaceErrorTolerance = 0.001;  // m, mean map-to-GT distance
 constexpr double kWovTolerance = 0.02;            // object map weighted overlap
 // Measured with no dropped segmentation request: 1, 2 and 4 threads gave identical figures
-// (320x240: mIoU 0.8810, WOv 0.738, 7 objects for 6; at 160x120 the reference map itself was
+// (320x240: mIoU 0.8810, WOv 0.838 by surface IoU (0.738 by voxel sets), 7 objects for 6; at 160x120 the reference map itself was
 // poor, WOv 0.20 with 3 objects, and agreeing with it meant little). Dropped requests (the pipeline never stalls tracking
 // for a busy segmenter) do change the object map: 4 threads once dropped one of 12 object
 // frames and kept 1 object instead of 3.
@@ -62,7 +62,7 @@ TEST(Determinism, MultiThreadMetricsMatchOneThreadWithinTolerance) {
   const ObjectEvaluation& ro = *ref.evaluation.objects;
   // The reference itself is a sensible map (else agreeing with it means little).
   EXPECT_GE(rs.miou, 0.8);   // measured 0.881
-  EXPECT_GE(ro.wov, 0.6);    // measured 0.738
+  EXPECT_GE(ro.wov, 0.75);   // measured 0.838
   EXPECT_LE(ref.mapper.objects, 8u);  // 7 for 6 objects
   for (int threads : {2, 4}) {
     SCOPED_TRACE("threads " + std::to_string(threads));
