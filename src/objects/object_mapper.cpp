@@ -99,22 +99,33 @@ namespace {
 
 /// The instance's exported points: projected onto the surface when asked, one per map voxel.
 void exported_points(const ObjectMap& map, const ObjectInstance& inst, const ObjectMapper::SurfaceProjection& onto_surface,
-                     ObjectSummary& o) {
+                     bool drop_other_classes, ObjectSummary& o) {
   if (!onto_surface) {
     o.points = inst.points;
     o.colours = inst.colours;
     return;
   }
-  const std::vector<Eigen::Vector3f> moved = onto_surface(inst.points);
+  const ObjectMapper::SurfaceSamples surface = onto_surface(inst.points);
+  const std::vector<bool> other = drop_other_classes ? points_of_other_classes(surface.labels, inst.class_id())
+                                                     : std::vector<bool>(surface.points.size(), false);
   std::unordered_set<uint64_t> seen;
-  for (size_t i = 0; i < moved.size(); ++i)
-    if (seen.insert(map.voxel_key(moved[i])).second) {
-      o.points.push_back(moved[i]);
+  for (size_t i = 0; i < surface.points.size(); ++i)
+    if (!other[i] && seen.insert(map.voxel_key(surface.points[i])).second) {
+      o.points.push_back(surface.points[i]);
       o.colours.push_back(inst.colours[i]);
     }
 }
 
 }  // namespace
+
+std::vector<bool> points_of_other_classes(const std::vector<ClassId>& labels, ClassId class_id) {
+  std::vector<bool> other(labels.size(), false);
+  size_t n_other = 0;
+  for (size_t i = 0; i < labels.size(); ++i)
+    if (labels[i] != 0 && labels[i] != class_id) other[i] = true, ++n_other;
+  if (2 * n_other > labels.size()) std::fill(other.begin(), other.end(), false);
+  return other;
+}
 
 std::vector<ObjectSummary> ObjectMapper::summaries(const SurfaceProjection& onto_surface) const {
   std::vector<ObjectSummary> out;
@@ -129,7 +140,8 @@ std::vector<ObjectSummary> ObjectMapper::summaries(const SurfaceProjection& onto
     for (size_t k = 0; k < shares.size(); ++k)
       if (shares[k] >= 0.005) o.class_distribution[std::string(class_name(static_cast<ClassId>(k)))] = shares[k];
     o.confidence = 1.0 - inst.mean_scores()[0];
-    exported_points(map_, inst, config_.points_on_surface ? onto_surface : SurfaceProjection{}, o);
+    exported_points(map_, inst, config_.points_on_surface ? onto_surface : SurfaceProjection{},
+                    config_.drop_points_of_other_classes, o);
     // Boxes describe the object's body: its largest cluster, trimmed of stray points.
     const std::vector<Eigen::Vector3f> body = largest_cluster(o.points, config_.box_cluster_distance);
     const Eigen::AlignedBox3f aabb = trimmed_box(body, config_.box_trim_fraction);

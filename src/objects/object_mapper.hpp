@@ -59,9 +59,14 @@ class ObjectMapper {
   void finish();
   /// The objects.json document.
   nlohmann::json to_json() const;  ///< of summaries() without surface projection
-  /// Moves points onto the fused surface (the Mapper passes the TSDF's projection): used for the
-  /// exported points when config points_on_surface.
-  using SurfaceProjection = std::function<std::vector<Eigen::Vector3f>(const std::vector<Eigen::Vector3f>&)>;
+  /// The fused surface at given points (the Mapper passes the TSDF's): each point moved onto it,
+  /// and the class the map shows there (0 = none). Used for the exported points when config
+  /// points_on_surface (and drop_points_of_other_classes).
+  struct SurfaceSamples {
+    std::vector<Eigen::Vector3f> points;
+    std::vector<ClassId> labels;  ///< same size as points
+  };
+  using SurfaceProjection = std::function<SurfaceSamples(const std::vector<Eigen::Vector3f>&)>;
   /// Every non-empty instance, with its box and class distribution.
   std::vector<ObjectSummary> summaries(const SurfaceProjection& onto_surface = {}) const;
 
@@ -97,5 +102,12 @@ class ObjectMapper {
 
 /// `trim_fraction` of the points is ignored at each end of every box axis (0 = exact hull).
 OrientedBox fit_oriented_box(const std::vector<Eigen::Vector3f>& points, double trim_fraction = 0.0);
+
+/// Which exported points to leave out (ObjectsConfig::drop_points_of_other_classes): those the
+/// fused map labels as another class than `class_id` (0 = no label), when they are a minority.
+/// A mask that bled over a neighbour in some frames left that neighbour's points in the
+/// instance, while the TSDF's label of each voxel weighs every frame (METHODS A6). A majority
+/// that disagrees says the object's class is in doubt, not where its surface is: none is left out.
+std::vector<bool> points_of_other_classes(const std::vector<ClassId>& surface_labels, ClassId class_id);
 
 }  // namespace semap

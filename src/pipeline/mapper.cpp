@@ -26,6 +26,7 @@
 #include "tsdf/map_io.hpp"
 #include "tsdf/tsdf_interpolation.hpp"
 #include "tsdf/semantic_tsdf.hpp"
+#include "tsdf/voxel_label.hpp"
 
 namespace semap {
 namespace {
@@ -584,7 +585,10 @@ std::vector<ObjectSummary> Mapper::objects() const {
   std::lock_guard lock(impl_->objects_mutex);
   return impl_->objects.summaries([this](const std::vector<Eigen::Vector3f>& points) {
     std::lock_guard tsdf_lock(impl_->tsdf_mutex);
-    return project_onto_surface(impl_->tsdf.map(), points);
+    ObjectMapper::SurfaceSamples surface;
+    surface.points = project_onto_surface(impl_->tsdf.map(), points);
+    surface.labels = surface_labels(impl_->tsdf.map(), surface.points);
+    return surface;
   });
 }
 

@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "tsdf/mc_tables.hpp"
+#include "tsdf/voxel_label.hpp"
 
 namespace semap {
 namespace {
@@ -40,19 +41,9 @@ bool block_less(const BlockIndex& a, const BlockIndex& b) {
 }  // namespace
 
 MeshExtractor::BlockMesh MeshExtractor::mesh_block(const TsdfMap& map, const Block& block) {
-  const bool use_bayes = map.has_bayes_layer();
   const bool rgb = map.config().mesh_colour == MeshColour::rgb && map.has_colour_layer();
   const float min_weight = static_cast<float>(map.config().mesh_min_weight);
-  const int bayes_stride = map.bayes().bytes_per_voxel();
-  const int min_votes = map.config().mesh_min_label_votes;
-  const uint8_t max_bayes_q = map.bayes().encode(static_cast<float>(map.config().mesh_min_label_probability));
-  // Evidence rule (METHODS A6): the argmax must lead the runner-up by N frames' votes. The odds
-  // of a lead of k frames are r^k; the threshold r^(N - 1/2) lies midway (in log) between N - 1
-  // and N, so the quantised probabilities cannot tip it. Capped at the odds the floor can hold.
-  const int min_frames = map.config().mesh_min_label_frames;
-  const float min_odds = min_frames == 0 ? 0.0f
-                                         : static_cast<float>(std::min(std::pow(map.config().bayes_frame_odds(), min_frames - 0.5),
-                                                                       0.9 * map.bayes().max_odds()));
+  const VoxelLabelRule label_rule(map);
   // Gather the 9^3 neighbourhood (this block plus the first layer of its +x/+y/+z neighbours).
   std::array<Sample, kN * kN * kN> samples;
   const Block* neighbours[2][2][2];
@@ -72,12 +63,7 @@ MeshExtractor::BlockMesh MeshExtractor::mesh_block(const TsdfMap& map, const Blo
         s.valid = true;
         s.sdf = v.sdf();
         // Labels with too little evidence (e.g. seen in one frame) are shown as unlabelled.
-        if (use_bayes) {
-          const uint8_t* bayes = &b->bayes[static_cast<size_t>(li) * bayes_stride];
-          s.label = bayes[1] <= max_bayes_q && map.bayes().top_odds(bayes) >= min_odds ? BayesLayerCodec::argmax(bayes) : 0;
-        } else {
-          s.label = (b->label_confidence && b->label_confidence[li] >= min_votes) ? v.label : 0;
-        }
+        s.label = label_rule.label(*b, li);
         s.colour = rgb ? b->colour[li] : class_colour(s.label);
       }
   BlockMesh mesh;

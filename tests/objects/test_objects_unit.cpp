@@ -578,3 +578,14 @@ TEST(ObjectsMap, MergeOfViewsFromOppositeSidesByContainment) {
     EXPECT_EQ(stats.after_merge, ratio < 1.0 ? 1u : 2u);
   }
 }
+
+// Exported points the fused TSDF labels as another class (a cup a bleeding mask put in the
+// table) are left out; unlabelled ones stay; when most disagree, the class is in doubt: all stay.
+TEST(ObjectsExport, PointsOfOtherClassesAreLeftOutWhenAMinority) {
+  const ClassId table = id(Label::kTable), cup = id(Label::kCup), floor = id(Label::kFloor);
+  const std::vector<ClassId> bled{table, 0, cup, table, floor, table, 0};
+  EXPECT_EQ(points_of_other_classes(bled, table), (std::vector<bool>{false, false, true, false, true, false, false}));
+  const std::vector<ClassId> mostly_cup{cup, cup, cup, table, 0};
+  EXPECT_EQ(points_of_other_classes(mostly_cup, table), std::vector<bool>(5, false));
+  EXPECT_TRUE(points_of_other_classes({}, table).empty());
+}

@@ -92,6 +92,7 @@ struct ObjectsConfig {
   double box_cluster_distance = 0.05;  ///< exported boxes: points of the largest cluster with this linking distance (m, 0 = all points)
   double box_trim_fraction = 0.01;     ///< exported boxes: this fraction of the points is ignored at each end of every axis
   bool points_on_surface = true;       ///< exported points (objects.json, objects/<id>.ply, boxes) projected onto the fused TSDF surface
+  bool drop_points_of_other_classes = true;  ///< exported points the fused TSDF labels as another class are left out (a minority of the object's)
 
   void visit(ParamVisitor& v) {
     const ParamRange<int> at_least_one{1};
@@ -149,6 +150,7 @@ struct ObjectsConfig {
     v.param("box_cluster_distance", box_cluster_distance, "m", "exported boxes enclose the largest cluster of the instance's points linked within this distance (0 = all points)", non_negative(1.0));
     v.param("box_trim_fraction", box_trim_fraction, "", "exported boxes ignore this fraction of the points at each end of every axis (stray depth-edge points)", {0.0, 0.49});
     v.param("points_on_surface", points_on_surface, "", "exported object points (and their boxes) are moved onto the fused TSDF surface: one frame's back-projection carries its depth noise, the TSDF averages every frame (the map keeps the raw points for association)");
+    v.param("drop_points_of_other_classes", drop_points_of_other_classes, "", "with points_on_surface: exported points where the fused TSDF label (the mesh's) names another class are left out, when they are a minority of the object's (a mask that bled over a cup put the cup in the table; where most points disagree the object's class is in doubt, not its points)");
   }
   /// Ranges come from visit(); the rules between parameters are here.
   void validate() const {
