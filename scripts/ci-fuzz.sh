@@ -1,20 +1,20 @@
 #!/usr/bin/env bash
-# Issue 8: builds the libFuzzer targets of fuzz/ (clang, ASan + UBSan) into build-fuzz/, replays
+# Issue 8: builds the libFuzzer targets of fuzz/ (clang, ASan + UBSan) into build-asan/ (the tree
+# the sanitizer tests use too, scripts/lib/asan-tree.sh), replays
 # the committed regression inputs (fuzz/regressions/TARGET/*), then runs every target for
 # SEMAP_FUZZ_SECONDS (default 30) from seeds written by the project's own writers. Fails on any
 # crash, sanitizer report, leak, timeout (> 10 s per input) or out-of-memory (> 2 GiB); the
-# offending input is kept as build-fuzz/artifacts/TARGET-crash-*. Prints executions per target.
+# offending input is kept as build-asan/artifacts/TARGET-crash-*. Prints executions per target.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 JOBS=${SEMAP_JOBS:-$(nproc)}
 SECS=${SEMAP_FUZZ_SECONDS:-30}
-BUILD=${SEMAP_FUZZ_BUILD:-build-fuzz}
+source scripts/lib/ccache-env.sh
+source scripts/lib/asan-tree.sh
+BUILD=$ASAN_BUILD
 
 start=$SECONDS
-CC=clang CXX=clang++ cmake -S . -B "$BUILD" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -DNDEBUG" "-DCMAKE_C_FLAGS_RELWITHDEBINFO=-O1 -DNDEBUG" \
-  -DSEMAP_SANITIZE=address,undefined -DSEMAP_BUILD_FUZZ=ON -DSEMAP_BUILD_TESTS=OFF \
-  -DSEMAP_BUILD_BENCH=OFF -DSEMAP_WITH_OPEN3D=OFF >/dev/null
+configure_asan_tree
 cmake --build "$BUILD" -j "$JOBS" --target fuzz_all
 echo "semap fuzz: built in $((SECONDS - start)) s"
 

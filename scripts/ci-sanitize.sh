@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Issue 8 / 21: the tests that exercise parsing, memory and threads (folders core, io,
 # segmentation, pipeline, reliability; not heavy) built and run under AddressSanitizer +
-# UndefinedBehaviorSanitizer in build-asan/ (-O1, line tables), and the threading tests under
-# ThreadSanitizer in build-tsan/: the segmentation hand-off (both busy policies), a threaded
+# UndefinedBehaviorSanitizer in build-asan/ (clang, -O1, line tables: the tree ci-fuzz.sh builds
+# its targets in, scripts/lib/asan-tree.sh), and the threading tests under ThreadSanitizer in
+# build-tsan/ (gcc): the segmentation hand-off (both busy policies), a threaded
 # pipeline run, a threaded run with real tracking (its loop-closure worker) and YOLO, and the
 # tracker's own threading tests. One build tree per sanitizer; each builds only what it runs.
 # SEMAP_ASAN=0 / SEMAP_TSAN=0 skip a part. Any sanitizer report fails: reports abort the
@@ -14,6 +15,8 @@ JOBS=${SEMAP_JOBS:-$(nproc)}
 COMMON=(-G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -DNDEBUG"
         "-DCMAKE_C_FLAGS_RELWITHDEBINFO=-O1 -DNDEBUG" -DSEMAP_BUILD_BENCH=OFF -DSEMAP_WITH_OPEN3D=OFF)
 SUPP="$PWD/scripts/sanitizer"
+source scripts/lib/ccache-env.sh
+source scripts/lib/asan-tree.sh
 
 fail_on_reports() {  # $1: a log file
   # The count first: under pipefail, `grep | head` in the condition is false when head exits
@@ -34,9 +37,9 @@ SAME_PATH_ONE_THREAD='PipelineTest\.(OneThreadRunsAreByteIdentical|RealtimeRunTa
 
 start=$SECONDS
 if [ "${SEMAP_ASAN:-1}" = 1 ]; then
-  cmake -S . -B build-asan "${COMMON[@]}" -DSEMAP_SANITIZE=address,undefined >/dev/null
+  configure_asan_tree
   ASAN_FOLDERS=(core io segmentation pipeline reliability)
-  cmake --build build-asan -j "$JOBS" --target semap "${ASAN_FOLDERS[@]/#/tests_}"
+  cmake --build "$ASAN_BUILD" -j "$JOBS" --target semap "${ASAN_FOLDERS[@]/#/tests_}"
   echo "semap sanitize: ASan+UBSan build in $((SECONDS - start)) s"
   # alloc_dealloc_mismatch=0: PCL 1.13 (built as C++14) gives its point clouds a class-specific
   # aligned operator new that a C++17/20 client does not see, so the shared_ptr deleter instantiated
@@ -47,8 +50,8 @@ if [ "${SEMAP_ASAN:-1}" = 1 ]; then
   export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
   t0=$SECONDS
   labels=$(IFS='|'; echo "^(${ASAN_FOLDERS[*]})$")
-  log=build-asan/Testing/Temporary/LastTest.log
-  if ! (cd build-asan && ctest -L "$labels" -LE heavy -E "$SAME_PATH_ONE_THREAD" --output-on-failure -j "$JOBS" --timeout 1200); then
+  log=$ASAN_BUILD/Testing/Temporary/LastTest.log
+  if ! (cd "$ASAN_BUILD" && ctest -L "$labels" -LE heavy -E "$SAME_PATH_ONE_THREAD" --output-on-failure -j "$JOBS" --timeout 1200); then
     # LeakSanitizer's own stop-the-world tracer sometimes segfaults at exit after a test passed
     # (google/sanitizers#1353, open; seen here in two clean-clone runs, 2026-12-03, both times after a
     # MapMerge test had passed; it passed 3 of 3 reruns).
@@ -58,8 +61,8 @@ if [ "${SEMAP_ASAN:-1}" = 1 ]; then
     echo "semap sanitize: LeakSanitizer's tracer crashed; running the failed tests once more"
     # By name: ctest numbers the tests of a filtered run in the filtered list, so --rerun-failed
     # (by number) ran a different test (2026-12-03: a 520 s merge test for the 76 s one).
-    names=$(cut -d: -f2- build-asan/Testing/Temporary/LastTestsFailed.log | sed 's/[][().*+?^$|\\]/\\&/g' | paste -sd'|')
-    (cd build-asan && ctest -R "^(${names})\$" --output-on-failure -j "$JOBS" --timeout 1200)
+    names=$(cut -d: -f2- "$ASAN_BUILD"/Testing/Temporary/LastTestsFailed.log | sed 's/[][().*+?^$|\\]/\\&/g' | paste -sd'|')
+    (cd "$ASAN_BUILD" && ctest -R "^(${names})\$" --output-on-failure -j "$JOBS" --timeout 1200)
     fail_on_reports "$log.first"
   fi
   fail_on_reports "$log"

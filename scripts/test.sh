@@ -4,13 +4,17 @@
 # time (scripts/ci-fuzz.sh, clang); the parsing/memory/thread tests under ASan+UBSan and the
 # threading tests under TSan (scripts/ci-sanitize.sh). SEMAP_QUICK=1 runs the fast suite only.
 # Under CI=true (set by .ci/run) a test whose shared data or model is missing fails instead of
-# skipping. Each step prints its time.
+# skipping. Each step prints its time, and each step that compiles the share of its compilations
+# that ccache served (scripts/lib/ccache-env.sh; the cache outlives the clone).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh clang libclang-rt-14-dev
+source scripts/lib/ccache-env.sh
 start=$SECONDS
+ccache_zero
 bash scripts/build.sh
 echo "semap test: build in $((SECONDS - start)) s"
+ccache_report "release build"
 t0=$SECONDS
 (cd build && ctest -LE heavy --output-on-failure -j "${SEMAP_JOBS:-$(nproc)}" --timeout 900)
 echo "semap test: fast suite in $((SECONDS - t0)) s"
@@ -21,10 +25,14 @@ if [ "${SEMAP_QUICK:-0}" != 1 ]; then
   (cd build && ctest -L ci_heavy --output-on-failure -j "${SEMAP_JOBS:-$(nproc)}" --timeout 900)
   echo "semap test: heavy subset in $((SECONDS - t0)) s"
   t0=$SECONDS
+  ccache_zero
   bash scripts/ci-fuzz.sh
   echo "semap test: fuzzing in $((SECONDS - t0)) s"
+  ccache_report "ASan+UBSan build (fuzz targets)"
   t0=$SECONDS
+  ccache_zero
   bash scripts/ci-sanitize.sh
   echo "semap test: sanitizers in $((SECONDS - t0)) s"
+  ccache_report "ASan+UBSan build (tests) and TSan build"
 fi
 echo "semap test: total $((SECONDS - start)) s"

@@ -46,8 +46,7 @@ double contained_share(const Eigen::AlignedBox3f& a, const Eigen::AlignedBox3f& 
 
 TEST(ObjectsReal, RedkitchenWithYoloHasTheKitchensObjectsOnce) {
   SEMAP_REQUIRE_DATA(dataset, "7scenes_redkitchen");
-  const std::filesystem::path model = test::models_dir() / "yolov8n-seg-320.onnx";
-  if (!std::filesystem::exists(model)) GTEST_SKIP() << "model missing: " << model;
+  SEMAP_REQUIRE_MODEL(model, "yolov8n-seg-320.onnx");
   test::TempDir dir("objects_real");
   RunOptions options;
   options.dataset = dataset;

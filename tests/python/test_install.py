@@ -7,7 +7,7 @@ import textwrap
 
 import pytest
 
-from conftest import BUILD
+from conftest import BUILD, skip_or_fail
 
 SCRIPT = textwrap.dedent("""
     import numpy as np, semap
@@ -27,7 +27,7 @@ SCRIPT = textwrap.dedent("""
 def test_install_and_import_from_the_prefix(tmp_path):
     cmake = os.environ.get("CMAKE_COMMAND", "cmake")
     if not (BUILD / "cmake_install.cmake").exists():
-        pytest.skip("no configured build folder at %s" % BUILD)
+        skip_or_fail("no configured build folder at %s" % BUILD)
     prefix = tmp_path / "prefix"
     subprocess.run([cmake, "--install", str(BUILD), "--prefix", str(prefix), "--component", "python"], check=True,
                    capture_output=True)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import semap
-from conftest import BUILD, TUM_SLICE, map_frames
+from conftest import BUILD, TUM_SLICE, map_frames, skip_or_fail
 
 # The 30-frame slice (mostly rotation), measured: ATE RMSE 0.0072 m, RPE over 0.5 s 0.038 m/s
 # and 3.5 deg/s. A camera that does not move (identity poses) scores 0.025 m, 0.089 m/s and
@@ -86,12 +86,12 @@ def test_same_trajectory_as_semap_run(tum_mapped, tum_path, tmp_path):
     """The binding adds nothing to the result: `semap run` on the same frames, same config."""
     semap_exe = BUILD / "semap"
     if not semap_exe.exists():
-        pytest.skip("build/semap not built")
+        skip_or_fail("build/semap not built")
     config = tmp_path / "c.yaml"
     config.write_text("tsdf:\n  colour_layer: true\n  mesh_colour: rgb\n")
     out = tmp_path / "run"
     subprocess.run([str(semap_exe), "run", str(tum_path), "--out", str(out), "--threads", "1", "--max-frames",
-                    str(TUM_SLICE), "--config", str(config)], check=True, capture_output=True)
+                    str(TUM_SLICE), "--config", str(config), "--segmenter", "none"], check=True, capture_output=True)
     mapper, _ = tum_mapped
     mapper.save(tmp_path / "py")
     ours = np.loadtxt(tmp_path / "py" / "trajectory.txt")

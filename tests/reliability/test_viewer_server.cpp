@@ -112,7 +112,7 @@ class ViewerServer : public ::testing::Test {
 };
 
 #define START_OR_SKIP(...) \
-  if (!start(__VA_ARGS__)) GTEST_SKIP() << "viewer not built into this binary: " << slurp(log_)
+  if (!start(__VA_ARGS__)) SEMAP_SKIP_OR_FAIL("viewer not built into this binary: " << slurp(log_))
 
 TEST_F(ViewerServer, OneByteRangePerRequestMultiAndOverlappingRangesAre416) {
   START_OR_SKIP();
