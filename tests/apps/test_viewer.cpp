@@ -302,7 +302,7 @@ nlohmann::json check_in_browser(const fs::path& output, const fs::path& shots, c
 }
 
 // Screenshots stay in the build folder for people to look at.
-fs::path screenshot_dir(const std::string& name) { return fs::path(SEMAP_BINARY_DIR) / "test_output" / name; }
+fs::path screenshot_dir(const std::string& name) { return semap_executable().parent_path() / "test_output" / name; }
 
 TEST(Viewer, HeadlessChromiumRendersMeshBoxesAndToggles) {
   if (const std::string why = browser_missing(SEMAP_VIEWER_SOURCE_DIR, chromium_path()); !why.empty()) SEMAP_SKIP_OR_FAIL(why);
@@ -350,7 +350,7 @@ TEST(Viewer, LiveViewShowsTheMapGrowingDuringSemapRun) {
   fs::remove_all(shots);
   fs::create_directories(shots);
   BackgroundServer run(shell_quote(semap_executable().string()) + " run " + shell_quote(kitchen.string()) + " --out " +
-                           shell_quote(out.string()) + " --view --port 0 --view-refresh-ms 500 --view-keep-s 300 --threads 2 --no-eval --realtime",
+                           shell_quote(out.string()) + " --view --port 0 --view-refresh-ms 500 --view-keep-s 300 --threads 2 --no-eval --realtime --segmenter none",
                        log);
   const std::string url = wait_for_url(run, log);
   ASSERT_FALSE(url.empty()) << "semap run --view printed no URL:\n" << read_file(log);
