@@ -1,4 +1,5 @@
-// `semap eval ate|semantic|objects`: the metrics of METHODS.md D on result files.
+// `semap eval ate|semantic|objects`: the metrics of METHODS.md D on result files;
+// `semap eval consistency OUT`: the ground-truth-free semantic check of a run's output (issue 38).
 // --json prints exactly one JSON object on stdout; otherwise an aligned table.
 #include <cmath>
 #include <cstdio>
@@ -12,6 +13,7 @@
 #include "apps/semap/commands.hpp"
 #include "semap/core/error.hpp"
 #include "core/paths.hpp"
+#include "semap/eval/consistency_metrics.hpp"
 #include "semap/eval/object_metrics.hpp"
 #include "semap/eval/semantic_metrics.hpp"
 #include "semap/eval/trajectory_metrics.hpp"
@@ -22,12 +24,13 @@ namespace semap::app {
 namespace {
 
 struct EvalOptions {
-  std::string gt, est, map;
+  std::string gt, est, map, out;
   bool json = false;
   double max_dt = 0.02;
   double delta_s = 1.0;
   SemanticEvalOptions semantic;
   ObjectEvalOptions objects;
+  ConsistencyOptions consistency;
 };
 
 void require_file(const std::string& path, const char* flag) {
@@ -124,10 +127,51 @@ int run_objects(const EvalOptions& o) {
   return 0;
 }
 
+/// "0.1234", or "n/a" when the class has no area.
+std::string share_text(const ClassAgreement& a, double share) {
+  if (!(a.area_m2 > 0.0)) return "n/a";
+  char text[32];
+  std::snprintf(text, sizeof text, "%.4f", share);
+  return text;
+}
+
+int run_consistency(const EvalOptions& o) {
+  const SemanticConsistency c = evaluate_consistency_folder(o.out, o.consistency);
+  if (o.json) {
+    nlohmann::json j = to_json(c);
+    j["out"] = o.out;
+    print_json(j);
+    return 0;
+  }
+  const GravityEstimate& g = c.gravity;
+  const std::string floor = g.floor_found ? "floor at " + compact_number(g.floor_height_m) + " m" : "no floor found";
+  std::printf("consistency  %s (%zu triangles, %.2f m^2)\n", o.out.c_str(), c.triangles, c.mesh_area_m2);
+  std::printf("gravity      up (%.4f %.4f %.4f) from %s; %s\n", g.up_W.x(), g.up_W.y(), g.up_W.z(),
+              std::string(enum_name(kGravityMethodNames, g.method)).c_str(),
+              floor.c_str());
+  std::printf("%-22s %8.4f\n", "labelled area share", c.labelled_area_share);
+  for (const auto& a : c.classes)
+    std::printf("  %-20s %8.4f\n", std::string(class_name(a.class_id)).c_str(), a.area_share);
+  std::printf("normals within %g deg  %-10s %-10s %s\n", c.agreement_deg, "share", "agreement", "as wound");
+  std::printf("  %-20s %-10.4f %-10s %s (up)\n", "floor (horizontal)", c.floor.area_share,
+              share_text(c.floor, c.floor.agreement).c_str(), share_text(c.floor, c.floor.facing_agreement).c_str());
+  std::printf("  %-20s %-10.4f %-10s %s (down)\n", "ceiling (horizontal)", c.ceiling.area_share,
+              share_text(c.ceiling, c.ceiling.agreement).c_str(),
+              share_text(c.ceiling, c.ceiling.facing_agreement).c_str());
+  std::printf("  %-20s %-10.4f %s\n", "wall (vertical)", c.wall.area_share, share_text(c.wall, c.wall.agreement).c_str());
+  if (c.floor_thickness_m)
+    std::printf("%-22s %8.4f m (heights %.3f .. %.3f m)\n", "floor thickness", *c.floor_thickness_m,
+                *c.floor_height_low_m, *c.floor_height_high_m);
+  else
+    std::printf("%-22s %8s (no floor-labelled area)\n", "floor thickness", "n/a");
+  return 0;
+}
+
 }  // namespace
 
 void add_eval_command(CLI::App& app, CommandRunner& run) {
-  auto* cmd = app.add_subcommand("eval", "Evaluate results: trajectory (ATE/RPE), semantic mesh (mIoU), object map (WOv, P/R)");
+  auto* cmd = app.add_subcommand(
+      "eval", "Evaluate results: trajectory (ATE/RPE), semantic mesh (mIoU), object map (WOv, P/R), consistency (no GT)");
   cmd->require_subcommand(1);
   auto opt = std::make_shared<EvalOptions>();
 
@@ -166,6 +210,17 @@ void add_eval_command(CLI::App& app, CommandRunner& run) {
       ->capture_default_str();
   obj->add_flag("--json", opt->json, "print one JSON object");
   obj->callback([&run, opt] { run = [opt] { return run_objects(*opt); }; });
+
+  auto* con = cmd->add_subcommand("consistency",
+                                  "Without ground truth: labelled area share, floor/wall/ceiling normals against "
+                                  "gravity, floor thickness of a run's OUT/mesh.ply (+ trajectory.txt)");
+  con->add_option("OUT", opt->out, "output folder of semap run / demo")->required();
+  con->add_option("--agreement-deg", opt->consistency.agreement_deg,
+                  "floor/ceiling normal within this of vertical, wall normal within this of horizontal [deg]")
+      ->check(finite_in(0.1, 89.0))
+      ->capture_default_str();
+  con->add_flag("--json", opt->json, "print one JSON object");
+  con->callback([&run, opt] { run = [opt] { return run_consistency(*opt); }; });
 }
 
 }  // namespace semap::app

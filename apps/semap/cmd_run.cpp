@@ -50,8 +50,12 @@ void add_run_command(CLI::App& app, CommandRunner& run) {
                   "continue the map of an earlier run (its output folder or map.semap): relocalise into it and extend it");
   add_enum_option(cmd, "--poses", args->options.poses, kPoseSourceNames, "camera poses");
   cmd->add_option("--segmenter", args->options.segmenter,
-                  "yolo:MODEL | semantic:MODEL | groundtruth | precomputed:DIR | none (default: the config's "
-                  "segmentation.segmenter, none = geometry and colour only)");
+                  "yolo:MODEL | semantic:MODEL | panoptic:SEMANTIC.onnx+INSTANCE.onnx | groundtruth | precomputed:DIR | "
+                  "none (geometry and colour only) | default (the default: the config's segmentation.segmenter, "
+                  "whose default is the default models when found)");
+  cmd->add_option("--models", args->options.models_dir,
+                  "folder of the default segmentation models (else $SEMAP_MODELS_DIR, the install's "
+                  "share/semap/models, a source build's ../shared/models)");
   cmd->add_option("--seg-noise", args->options.seg_noise, "simulate an imperfect segmenter on ground-truth labels (flicker rate 0..1)")
       ->check(finite_in(0.0, 1.0));
   cmd->add_option("--voxel", args->voxel, "TSDF voxel size in metres (overrides the config)")->check(finite_in(0.001, 1.0));

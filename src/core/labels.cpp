@@ -52,6 +52,10 @@ constexpr std::array<ClassInfo, kNumClasses> kClasses{{
     {"remote", {0, 255, 127}},
     {"teddy", {210, 105, 30}},
     {"other", {127, 127, 127}},
+    {"curtain", {219, 112, 147}},
+    {"picture", {0, 100, 100}},
+    {"rug", {128, 64, 128}},
+    {"mirror", {75, 0, 130}},
 }};
 
 }  // namespace
@@ -71,7 +75,8 @@ Rgb8 class_colour(ClassId c) {
 }
 
 bool is_stuff(ClassId c) {
-  return c >= id(Label::kWall) && c <= id(Label::kWindow);
+  return (c >= id(Label::kWall) && c <= id(Label::kWindow)) || c == id(Label::kCurtain) || c == id(Label::kRug) ||
+         c == id(Label::kMirror);
 }
 
 }  // namespace semap

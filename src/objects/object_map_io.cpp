@@ -1,7 +1,7 @@
 // ObjectMap as a map.semap section (issue 19):
-//   u32 format | u32 next id | u64 instance count | per instance: u32 id, i32 n, i32 s, i32 s_total,
-//   u8 state, u8 changed, u8 decided class, u64 first frame, u64 last frame, u64 last step,
-//   f64[kNumClasses] score sum, u64 points, per point f32 x y z + u8 r g b,
+//   u32 format | u32 class count C | u32 next id | u64 instance count | per instance: u32 id, i32 n,
+//   i32 s, i32 s_total, u8 state, u8 changed, u8 decided class, u64 first frame, u64 last frame,
+//   u64 last step, f64[C] score sum, u64 points, per point f32 x y z + u8 r g b,
 //   u64 co-associations, per entry (ascending id) u32 id, i32 count
 // Point frames are not kept: a saved map's points are fixed (kSavedMapFrame). The voxel index,
 // centroid sum and box are rebuilt from the points.
@@ -14,7 +14,10 @@
 namespace semap {
 namespace {
 
-constexpr uint32_t kObjectStateFormat = 1;
+// Format 2 (issue 38) stores the class count: classes are appended after "other", so a map
+// written with fewer classes still reads (format 1 had no count: 39 classes, ids 0..38).
+constexpr uint32_t kObjectStateFormat = 2;
+constexpr uint32_t kFormat1Classes = 39;
 
 void put_instance(ByteWriter& w, const ObjectInstance& inst) {
   w.put(inst.id), w.put(static_cast<int32_t>(inst.n));
@@ -41,6 +44,7 @@ void put_instance(ByteWriter& w, const ObjectInstance& inst) {
 std::string ObjectMap::encode_state() const {
   ByteWriter w;
   w.put(kObjectStateFormat);
+  w.put(static_cast<uint32_t>(kNumClasses));
   w.put(next_id_);
   w.put(static_cast<uint64_t>(instances_.size()));
   for (const ObjectInstance& inst : instances_) put_instance(w, inst);
@@ -49,8 +53,12 @@ std::string ObjectMap::encode_state() const {
 
 void ObjectMap::decode_state(std::string_view bytes, const std::filesystem::path& path) {
   ByteReader r(bytes, path, kObjectsSection);
-  if (const uint32_t format = r.get<uint32_t>(); format != kObjectStateFormat)
-    r.fail("objects format " + std::to_string(format) + ", this build reads " + std::to_string(kObjectStateFormat));
+  const uint32_t format = r.get<uint32_t>();
+  if (format != 1 && format != kObjectStateFormat)
+    r.fail("objects format " + std::to_string(format) + ", this build reads 1 and " + std::to_string(kObjectStateFormat));
+  const uint32_t classes = format == 1 ? kFormat1Classes : r.get<uint32_t>();
+  if (classes > static_cast<uint32_t>(kNumClasses))
+    r.fail("objects have " + std::to_string(classes) + " classes, this build knows " + std::to_string(kNumClasses));
   const uint32_t next_id = r.get<uint32_t>();
   std::vector<ObjectInstance> instances(r.get_count(64));
   for (ObjectInstance& inst : instances) {
@@ -64,8 +72,8 @@ void ObjectMap::decode_state(std::string_view bytes, const std::filesystem::path
     inst.decided_class = r.get<ClassId>();
     if (inst.decided_class >= kNumClasses) r.fail("bad object class");
     inst.first_frame = r.get<uint64_t>(), inst.last_frame = r.get<uint64_t>(), inst.last_step = r.get<uint64_t>();
-    inst.score_sum.resize(kNumClasses);
-    r.read(inst.score_sum.data(), kNumClasses * sizeof(double));
+    inst.score_sum.assign(kNumClasses, 0.0);
+    r.read(inst.score_sum.data(), classes * sizeof(double));
     const size_t n_points = r.get_count(3 * sizeof(float) + sizeof(Rgb8));
     std::vector<Eigen::Vector3f> points(n_points);
     std::vector<Rgb8> colours(n_points);

@@ -5,19 +5,12 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
+#include "semap/core/gravity.hpp"
 #include "semap/core/labels.hpp"
 #include "core/paths.hpp"
 
 namespace semap {
 namespace {
-
-/// World "up": cameras are held upright, so the mean of their -y axes points up.
-Eigen::Vector3d estimate_up(const Trajectory& trajectory) {
-  Eigen::Vector3d up = Eigen::Vector3d::Zero();
-  for (const auto& p : trajectory) up -= p.T_world_camera.linear().col(1);
-  if (up.norm() < 1e-6) return Eigen::Vector3d::UnitZ();
-  return up.normalized();
-}
 
 std::string html_escape(const std::string& s) {
   std::string out;
@@ -59,7 +52,7 @@ void flatten(const nlohmann::json& j, const std::string& prefix, std::vector<std
 
 cv::Mat render_topdown(const TriangleMesh& mesh, const Trajectory& trajectory,
                        const std::vector<ReportObject>& objects, int max_side_px) {
-  const Eigen::Vector3d up = estimate_up(trajectory);
+  const Eigen::Vector3d up = estimate_gravity(mesh, trajectory).up_W;
   // Orthonormal basis (ex, ey) of the ground plane.
   Eigen::Vector3d ex = up.unitOrthogonal();
   Eigen::Vector3d ey = up.cross(ex);
@@ -166,6 +159,7 @@ void write_report_html(const std::filesystem::path& out_dir, const nlohmann::jso
   table("Summary", report.value("summary", nlohmann::json{}));
   table("Evaluation", report.value("evaluation", nlohmann::json{}));
   table("Objects per class", report.value("objects_per_class", nlohmann::json{}));
+  table("Semantic consistency (no ground truth; semap eval consistency)", report.value("consistency", nlohmann::json{}));
   if (report.contains("timings")) {
     h << "<h2>Time per stage</h2><table><tr><th>stage</th><th>count</th><th>mean ms</th><th>median ms</th><th>p95 ms</th></tr>\n";
     for (auto it = report["timings"].begin(); it != report["timings"].end(); ++it)

@@ -22,7 +22,7 @@ struct ReportObject {
 };
 
 /// Top-down orthographic picture of the labelled mesh (ceiling cut away), object boxes with
-/// class names and the camera trajectory. "Up" is estimated from the cameras' mean up axis.
+/// class names and the camera trajectory. "Up" is estimate_gravity's (core/gravity.hpp).
 cv::Mat render_topdown(const TriangleMesh& mesh, const Trajectory& trajectory,
                        const std::vector<ReportObject>& objects, int max_side_px = 900);
 

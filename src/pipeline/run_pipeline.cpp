@@ -5,6 +5,7 @@
 #include <spdlog/spdlog.h>
 #include <tbb/global_control.h>
 
+#include <cstdlib>
 #include <opencv2/imgcodecs.hpp>
 #include <thread>
 
@@ -12,6 +13,7 @@
 #include "core/cpu_time.hpp"
 #include "core/paths.hpp"
 #include "core/progress.hpp"
+#include "semap/eval/consistency_metrics.hpp"
 #include "semap/io/dataset.hpp"
 #include "semap/io/frame_source.hpp"
 #include "io/output_folder.hpp"
@@ -62,9 +64,6 @@ class Prefetcher {
   std::thread thread_;
 };
 
-std::string resolved_spec(const RunOptions& options, const SemapConfig& config) {
-  return options.segmenter.empty() ? config.segmentation.segmenter : options.segmenter;
-}
 
 std::map<std::string, int> objects_per_class(const std::vector<ObjectSummary>& objects) {
   std::map<std::string, int> out;
@@ -182,16 +181,63 @@ void write_run_report(const std::filesystem::path& dir, const RunResult& result,
     if (!cv::imwrite(tmp.string() + ".png", topdown)) throw Error(dir / "topdown.png", "cannot write");
     std::filesystem::rename(tmp.string() + ".png", tmp);
   });
-  const nlohmann::json report = to_json(result);
+  nlohmann::json report = to_json(result);
+  report["consistency"] = to_json(evaluate_consistency(outputs.mesh, outputs.trajectory));  // issue 38
   write_file_atomic(dir / "report.json", report.dump(2) + "\n");
   write_report_html(dir, report);
 }
 
 }  // namespace
 
-std::unique_ptr<Segmenter> make_run_segmenter(const RunOptions& options, const SemapConfig& config,
-                                              const FrameSource& source) {
-  const std::string spec = resolved_spec(options, config);
+// ---- default segmentation models (issue 38) ----
+
+// The one translation unit that knows the install prefix and the source tree (compile
+// definitions from src/pipeline/CMakeLists.txt): nothing else bakes in absolute paths.
+std::vector<std::filesystem::path> model_search_path(const std::filesystem::path& option) {
+  std::vector<std::filesystem::path> dirs;
+  if (!option.empty()) dirs.push_back(option);
+  if (const char* env = std::getenv("SEMAP_MODELS_DIR"); env && *env) dirs.emplace_back(env);
+#ifdef SEMAP_INSTALL_DATADIR
+  dirs.push_back(std::filesystem::path(SEMAP_INSTALL_DATADIR) / "semap" / "models");
+#endif
+#ifdef SEMAP_SOURCE_DIR
+  dirs.push_back(std::filesystem::path(SEMAP_SOURCE_DIR).parent_path() / "shared" / "models");
+#endif
+  return dirs;
+}
+
+DefaultSegmenter find_default_segmenter(const std::vector<std::filesystem::path>& search_path) {
+  for (const std::filesystem::path& dir : search_path) {
+    const std::filesystem::path semantic = dir / kDefaultSemanticModel;
+    std::filesystem::path instance;
+    for (const char* name : kDefaultInstanceModels)
+      if (instance.empty() && is_regular_file_path(dir / name)) instance = dir / name;
+    const bool has_semantic = is_regular_file_path(semantic);
+    if (has_semantic && !instance.empty())
+      return {"panoptic:" + semantic.string() + "+" + instance.string(), dir};
+    if (has_semantic) return {"semantic:" + semantic.string(), dir};
+    if (!instance.empty()) return {"yolo:" + instance.string(), dir};
+  }
+  return {};
+}
+
+std::string run_segmenter_spec(const RunOptions& options, const SemapConfig& config,
+                               std::filesystem::path* default_models_dir) {
+  const std::string spec = options.segmenter.empty() ? config.segmentation.segmenter : options.segmenter;
+  if (spec != kDefaultSegmenterSpec) return spec;
+  const DefaultSegmenter found = find_default_segmenter(model_search_path(options.models_dir));
+  if (!options.models_dir.empty() && found.dir != options.models_dir)
+    throw Error(options.models_dir, std::string("--models: holds none of the default models (") +
+                                        kDefaultSemanticModel + ", " + kDefaultInstanceModels[0] + ", " +
+                                        kDefaultInstanceModels[1] + ")");
+  if (default_models_dir) *default_models_dir = found.dir;
+  return found.spec.empty() ? "none" : found.spec;
+}
+
+namespace {
+
+std::unique_ptr<Segmenter> run_segmenter_from_spec(const std::string& spec, const RunOptions& options,
+                                                   const SemapConfig& config, const FrameSource& source) {
   const bool simulated = options.seg_noise > 0;
   if ((spec == "groundtruth" || simulated) && !(source.dataset() && source.dataset()->has_label_ground_truth()))
     throw Error(source.name(), "--segmenter groundtruth / --seg-noise need per-frame label images, this input has none");
@@ -200,6 +246,13 @@ std::unique_ptr<Segmenter> make_run_segmenter(const RunOptions& options, const S
   noise.flicker_rate = options.seg_noise;
   return std::make_unique<SimulatedSegmenter>(make_segmenter("groundtruth", config.segmentation, source.camera()),
                                               noise, 1);
+}
+
+}  // namespace
+
+std::unique_ptr<Segmenter> make_run_segmenter(const RunOptions& options, const SemapConfig& config,
+                                              const FrameSource& source) {
+  return run_segmenter_from_spec(run_segmenter_spec(options, config), options, config, source);
 }
 
 namespace {
@@ -283,14 +336,25 @@ struct MappedSource {
   Clock::time_point reading_ended;  ///< the streaming stages' end (fps online), before finish()
   double cpu_ms_reading_ended = 0;  ///< process CPU then
   double opencv_workers_ms_reading_ended = 0;  ///< of OpenCV's workers then
+  std::filesystem::path default_models_dir;  ///< where the default models came from (RunResult)
 };
 
 MappedSource map_source(const RunOptions& options, const SemapConfig& config, FrameSource& source) {
-  std::unique_ptr<Segmenter> segmenter = make_run_segmenter(options, config, source);
-  if (!segmenter && options.show_progress)
+  MappedSource out;
+  const std::string spec = run_segmenter_spec(options, config, &out.default_models_dir);
+  std::unique_ptr<Segmenter> segmenter = run_segmenter_from_spec(spec, options, config, source);
+  const bool wanted_default = (options.segmenter.empty() ? config.segmentation.segmenter : options.segmenter) ==
+                              kDefaultSegmenterSpec;
+  if (!segmenter && options.show_progress && wanted_default) {
+    std::string searched;
+    for (const auto& dir : model_search_path(options.models_dir)) searched += (searched.empty() ? "" : ", ") + dir.string();
+    std::fprintf(stderr, "semap run: no segmentation models in %s: mapping geometry and colour only (--models DIR)\n",
+                 searched.c_str());
+  } else if (!segmenter && options.show_progress)
     std::fprintf(stderr, "semap run: no segmenter: mapping geometry and colour only (add --segmenter "
                          "yolo:MODEL.onnx for classes and objects)\n");
-  MappedSource out;
+  else if (wanted_default && options.show_progress)
+    std::fprintf(stderr, "semap run: default segmentation models from %s\n", out.default_models_dir.string().c_str());
   out.mapper = make_run_mapper(options, config, source, std::move(segmenter));
   set_reloader(*out.mapper, source.dataset());
   const ObserverScope observed(options.observe_mapper, *out.mapper);
@@ -342,6 +406,7 @@ RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
   RunResult result;
   result.mapper = mapper.stats();
   result.not_merged = mapped.not_merged;
+  result.default_models_dir = mapped.default_models_dir;
   check_run_is_usable(source->name(), result.mapper, outputs, skipped);
 
   write_map_outputs(mapper, outputs, out.staging());

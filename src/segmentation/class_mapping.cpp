@@ -33,7 +33,7 @@ std::string normalise(std::string_view name) {
   return out;
 }
 
-// Aliases of model class names (COCO-80, VOC-21, NYU/ScanNet, YCB) -> project class names.
+// Aliases of model class names (COCO-80, VOC-21, ADE20K, NYU/ScanNet, YCB) -> project class names.
 const std::unordered_map<std::string, std::string>& aliases() {
   static const std::unordered_map<std::string, std::string> table = {
       {"background", "unlabelled"}, {"void", "unlabelled"}, {"unlabeled", "unlabelled"}, {"none", "unlabelled"},
@@ -47,13 +47,17 @@ const std::unordered_map<std::string, std::string>& aliases() {
       {"bookshelf", "bookcase"}, {"bookshelves", "bookcase"}, {"shelves", "shelf"}, {"fridge", "refrigerator"},
       {"remote control", "remote"}, {"computer keyboard", "keyboard"}, {"computer mouse", "mouse"},
       {"notebook", "laptop"}, {"armchair", "chair"}, {"office chair", "chair"}, {"stool", "chair"},
-      {"bench", "other"}, {"carpet", "floor"}, {"rug", "floor"}, {"floor mat", "floor"},
-      {"blinds", "window"}, {"curtain", "window"}, {"cupboard", "cabinet"}, {"dresser", "cabinet"},
+      {"bench", "other"}, {"carpet", "rug"}, {"carpeting", "rug"}, {"floor mat", "rug"},
+      {"blinds", "window"}, {"drape", "curtain"}, {"drapes", "curtain"}, {"cupboard", "cabinet"}, {"dresser", "cabinet"},
       {"nightstand", "cabinet"}, {"night stand", "cabinet"}, {"kitchen cabinet", "cabinet"},
       {"microwave oven", "microwave"}, {"stove", "oven"}, {"cardboard box", "box"}, {"gelatin box", "box"},
       {"cracker box", "box"}, {"sugar box", "box"}, {"pudding box", "box"}, {"bathtub", "other"},
       {"desk lamp", "lamp"}, {"light", "lamp"}, {"pitcher base", "other"}, {"people", "person"},
       {"man", "person"}, {"woman", "person"}, {"sofa chair", "sofa"},
+      // ADE20K (issue 38). armchair stays "chair" (above): ScanNet/NYU40 file armchairs under
+      // chair, and the COCO instance model calls them chair (or couch) too, so both networks agree.
+      {"windowpane", "window"}, {"painting", "picture"}, {"poster", "picture"}, {"photo", "picture"},
+      {"picture frame", "picture"}, {"mirror stuff", "mirror"},
   };
   return table;
 }
@@ -89,6 +93,14 @@ const std::vector<std::string>& coco80_class_names() {
       "potted plant", "bed", "dining table", "toilet", "tv", "laptop", "mouse", "remote", "keyboard",
       "cell phone", "microwave", "oven", "toaster", "sink", "refrigerator", "book", "clock", "vase",
       "scissors", "teddy bear", "hair drier", "toothbrush"};
+  return names;
+}
+
+const std::vector<std::string>& ade20k32_class_names() {
+  static const std::vector<std::string> names = {
+      "other", "wall", "building", "sky", "floor", "tree", "ceiling", "road", "bed", "windowpane", "grass",
+      "cabinet", "sidewalk", "person", "earth", "door", "table", "mountain", "plant", "curtain", "chair", "car",
+      "water", "painting", "sofa", "shelf", "house", "sea", "mirror", "rug", "field", "armchair"};
   return names;
 }
 
@@ -128,17 +140,21 @@ ClassMapping::ClassMapping(std::vector<std::string> model_names, const std::vect
   }
 }
 
-ClassMapping make_class_mapping(const SegmentationConfig& config, int model_class_count, const std::string& model_path) {
+ClassMapping make_class_mapping(const SegmentationConfig& config, int model_class_count, const std::string& model_path,
+                                const std::string& network_class_names_file) {
+  const std::string& file = network_class_names_file.empty() ? config.class_names_file : network_class_names_file;
   std::vector<std::string> names;
-  if (!config.class_names_file.empty()) {
-    names = read_class_names(config.class_names_file);
+  if (!file.empty()) {
+    names = read_class_names(file);
     if (static_cast<int>(names.size()) != model_class_count)
-      throw Error(config.class_names_file, "lists " + std::to_string(names.size()) + " classes but the model " +
-                                               model_path + " has " + std::to_string(model_class_count));
+      throw Error(file, "lists " + std::to_string(names.size()) + " classes but the model " + model_path + " has " +
+                            std::to_string(model_class_count));
   } else if (model_class_count == 80) {
     names = coco80_class_names();
   } else if (model_class_count == 21) {
     names = voc21_class_names();
+  } else if (model_class_count == 32) {
+    names = ade20k32_class_names();
   } else {
     spdlog::warn("{}: {} classes and no segmentation.class_names_file: every class maps to 'other'", model_path,
                  model_class_count);

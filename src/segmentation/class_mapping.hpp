@@ -18,9 +18,11 @@ struct SegmentationConfig;
 /// anything unknown -> other.
 ClassId map_class_name(std::string_view name);
 
-/// The built-in class lists (index = model class id), as in ../shared/models/coco80.txt/voc21.txt.
+/// The built-in class lists (index = model class id), as in ../shared/models/coco80.txt,
+/// voc21.txt and ade20k32.txt (index 0 "other" = any ADE20K class outside the 31 kept).
 const std::vector<std::string>& coco80_class_names();
 const std::vector<std::string>& voc21_class_names();
+const std::vector<std::string>& ade20k32_class_names();
 
 /// Reads one class name per line (blank trailing lines ignored). Throws semap::Error naming
 /// the file when it is missing or empty.
@@ -46,9 +48,12 @@ class ClassMapping {
   std::vector<ClassId> table_;
 };
 
-/// The mapping for a model with `model_class_count` classes: config.class_names_file when set
-/// (its line count must match), else the built-in COCO-80 (80 classes) or VOC-21 (21) list,
-/// else every class maps to "other" (a warning is logged). config.class_map overrides apply.
-ClassMapping make_class_mapping(const SegmentationConfig& config, int model_class_count, const std::string& model_path);
+/// The mapping for a model with `model_class_count` classes: `network_class_names_file` (the
+/// network's own segmentation.yolo/semantic.class_names_file) when set, else
+/// config.class_names_file when set (its line count must match), else the built-in COCO-80
+/// (80 classes), VOC-21 (21) or ADE20K-32 (32) list, else every class maps to "other" (a
+/// warning is logged). config.class_map overrides apply.
+ClassMapping make_class_mapping(const SegmentationConfig& config, int model_class_count, const std::string& model_path,
+                                const std::string& network_class_names_file = {});
 
 }  // namespace semap

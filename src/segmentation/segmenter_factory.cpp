@@ -3,6 +3,7 @@
 #include "semap/core/error.hpp"
 #include "segmentation/groundtruth_segmenter.hpp"
 #include "segmentation/onnx_model_info.hpp"
+#include "segmentation/panoptic_segmenter.hpp"
 #include "segmentation/registration.hpp"
 #include "segmentation/semantic_segmenter.hpp"
 #include "segmentation/yolo_segmenter.hpp"
@@ -35,11 +36,25 @@ std::string detect_kind(const std::string& path) {
                         " outputs: use yolo:PATH or semantic:PATH");
 }
 
+std::string strip_prefix(const std::string& s, const std::string& prefix) {
+  return s.compare(0, prefix.size(), prefix) == 0 ? s.substr(prefix.size()) : s;
+}
+
+/// "SEMANTIC+INSTANCE" (each optionally "semantic:"/"yolo:"-prefixed, as name() writes them):
+/// split after the first ".onnx" followed by '+', else at the first '+'.
+std::pair<std::string, std::string> split_panoptic(const std::string& spec, const std::string& rest) {
+  size_t plus = rest.find(".onnx+");
+  plus = plus == std::string::npos ? rest.find('+') : plus + 5;
+  if (plus == std::string::npos || plus == 0 || plus + 1 >= rest.size())
+    throw Error("segmenter '" + spec + "'", "panoptic needs two models: panoptic:SEMANTIC.onnx+INSTANCE.onnx");
+  return {strip_prefix(rest.substr(0, plus), "semantic:"), strip_prefix(rest.substr(plus + 1), "yolo:")};
+}
+
 }  // namespace
 
 std::unique_ptr<Segmenter> make_segmenter(const std::string& spec, const SegmentationConfig& config,
                                           const CameraModel& camera) {
-  if (spec.empty() || spec == "none") return nullptr;
+  if (spec.empty() || spec == "none" || spec == kDefaultSegmenterSpec) return nullptr;
   if (spec == "groundtruth") return std::make_unique<GroundTruthSegmenter>();
   std::string kind, path;
   if (const size_t colon = spec.find(':'); colon != std::string::npos) {
@@ -49,15 +64,21 @@ std::unique_ptr<Segmenter> make_segmenter(const std::string& spec, const Segment
     path = spec;
     kind = detect_kind(path);
   } else {
-    throw Error("segmenter '" + spec + "'", "unknown spec: use yolo:PATH, semantic:PATH, groundtruth, precomputed:DIR or none");
+    throw Error("segmenter '" + spec + "'", "unknown spec: use yolo:PATH, semantic:PATH, panoptic:SEMANTIC+INSTANCE, groundtruth, precomputed:DIR or none");
   }
   if (path.empty()) throw Error("segmenter '" + spec + "'", "missing path after '" + kind + ":'");
   std::unique_ptr<Segmenter> seg;
   if (kind == "yolo") seg = std::make_unique<YoloSegmenter>(path, config);
   else if (kind == "semantic") seg = std::make_unique<SemanticSegmenter>(path, config);
   else if (kind == "precomputed") seg = std::make_unique<PrecomputedSegmenter>(path, config);
-  else
-    throw Error("segmenter '" + spec + "'", "unknown kind '" + kind + "': use yolo, semantic, precomputed, groundtruth or none");
+  else if (kind == "panoptic") {
+    const auto [semantic_path, instance_path] = split_panoptic(spec, path);
+    auto semantic = std::make_unique<SemanticSegmenter>(semantic_path, config);  // first: its errors first
+    seg = std::make_unique<PanopticSegmenter>(std::move(semantic), std::make_unique<YoloSegmenter>(instance_path, config),
+                                              config.panoptic.min_instance_score);
+  } else
+    throw Error("segmenter '" + spec + "'",
+                "unknown kind '" + kind + "': use yolo, semantic, panoptic, precomputed, groundtruth or none");
   if (config.register_to_depth && needs_registration(camera))
     seg = std::make_unique<DepthRegisteredSegmenter>(std::move(seg), camera);
   return seg;

@@ -68,7 +68,7 @@ SegmentationResult SemanticSegmenter::segment_image(const cv::Mat& bgr) {
   const int nc = nhwc_out ? d3 : d1, oh = nhwc_out ? d1 : d2, ow = nhwc_out ? d2 : d3;
   if (nc != num_classes_) {
     num_classes_ = nc;
-    mapping_ = make_class_mapping(config_, nc, model_path_.string());
+    mapping_ = make_class_mapping(config_, nc, model_path_.string(), config_.semantic.class_names_file);
   }
   // Per-pixel softmax over model classes, summed into project classes.
   cv::Mat probs(oh, ow, CV_32FC(kNumClasses), cv::Scalar::all(0));

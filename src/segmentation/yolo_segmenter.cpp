@@ -56,7 +56,7 @@ YoloSegmenter::YoloSegmenter(const std::filesystem::path& model_path, const Segm
 void YoloSegmenter::setup_classes(int num_classes) {
   if (num_classes == num_classes_) return;
   num_classes_ = num_classes;
-  mapping_ = make_class_mapping(config_, num_classes, model_path_.string());
+  mapping_ = make_class_mapping(config_, num_classes, model_path_.string(), config_.yolo.class_names_file);
 }
 
 YoloSegmenter::Candidates YoloSegmenter::run_network(const cv::Mat& bgr) {

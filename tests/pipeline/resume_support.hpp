@@ -17,9 +17,9 @@ inline std::string file_bytes(const std::filesystem::path& path) {
 }
 
 /// `semap run DATASET --out OUT [--resume RESUME] [--segmenter SEGMENTER]` with 2 threads, no
-/// progress lines.
+/// progress lines; geometry only unless a segmenter is given (not the default models, issue 38).
 inline RunResult map_recording(const std::filesystem::path& dataset, const std::filesystem::path& out,
-                               const std::filesystem::path& resume = {}, const std::string& segmenter = "") {
+                               const std::filesystem::path& resume = {}, const std::string& segmenter = "none") {
   RunOptions options;
   options.segmenter = segmenter;
   options.dataset = dataset;

@@ -109,7 +109,7 @@ class DaskCluster:
 def run_fleet(recordings, out, address, kill_worker=None):
     dirs, _, config = recordings
     cmd = [sys.executable, "-m", "semap.fleet", *map(str, dirs), "--out", str(out), "--scheduler", address,
-           "--config", str(config)]
+           "--config", str(config), "--segmenter", "none"]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env(), text=True)
     killed = False
     if kill_worker is not None:
@@ -193,7 +193,7 @@ def test_a_failing_recording_is_reported_and_the_others_still_merge(recordings, 
     (broken / "dataset.yaml").write_text("format: tum\ncamera: {fx: 1}\n")  # incomplete camera: a semap error
     out = tmp_path / "out"
     cmd = [sys.executable, "-m", "semap.fleet", str(dirs[0]), str(broken), str(dirs[1]), "--out", str(out),
-           "--config", str(config), "--workers", "2", "--retries", "0"]
+           "--config", str(config), "--segmenter", "none", "--workers", "2", "--retries", "0"]
     proc = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env(), text=True, timeout=560)
     assert proc.returncode == 0, proc.stdout
     assert "broken failed: Error: %s" % broken in proc.stdout, proc.stdout

@@ -20,6 +20,9 @@ enum class Label : ClassId {
   kSink, kRefrigerator, kMicrowave, kOven, kToilet, kPerson,
   kBag, kPillow, kRemote, kTeddy,
   kOther,  ///< a recognised object of a class outside this set
+  // Appended after kOther (issue 38) so that ids stored in saved maps keep their values; new
+  // classes go here, before kCount. kOther is therefore NOT the largest id.
+  kCurtain, kPicture, kRug, kMirror,
   kCount
 };
 
@@ -39,7 +42,9 @@ std::string_view class_name(ClassId c);
 std::optional<ClassId> class_from_name(std::string_view name);
 /// The fixed palette (documented in README): colour of a class id.
 Rgb8 class_colour(ClassId c);
-/// Structural classes (wall/floor/ceiling/door/window) are "stuff", the rest are objects.
+/// "Stuff" (not countable objects: never object-map instances): the structural classes
+/// wall/floor/ceiling/door/window and the surface coverings curtain/rug/mirror (COCO panoptic
+/// also counts curtain, rug and mirror as stuff). Everything else, picture included, is an object.
 bool is_stuff(ClassId c);
 
 }  // namespace semap

@@ -2,10 +2,12 @@
 // `semap run` as a library call: the dataset loop around a semap::Mapper. It reads the
 // dataset on its own thread, feeds the Mapper, shows progress, writes the outputs, evaluates
 // against ground truth when there is some, and writes the report.
+#include <array>
 #include <functional>
 #include <filesystem>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "semap/core/params.hpp"
 #include "semap/io/frame_source.hpp"
@@ -29,9 +31,13 @@ struct RunOptions {
   DatasetOptions dataset_options;  ///< e.g. the ROS bag topics
   std::filesystem::path out_dir;
   PoseSource poses = PoseSource::track;
-  /// yolo:PATH | semantic:PATH | groundtruth | precomputed:DIR | none; empty: the config's
-  /// segmentation.segmenter (default none: geometry and colour only).
+  /// yolo:PATH | semantic:PATH | panoptic:SEM+INST | groundtruth | precomputed:DIR | none |
+  /// default; empty: the config's segmentation.segmenter, whose default is "default": the
+  /// default models (find_default_segmenter) when found, else none (geometry and colour only).
   std::string segmenter;
+  /// Where the default models are (`--models DIR`); empty: looked up (model_search_path). Only
+  /// read when the segmenter is "default"; a folder given here must hold a default model.
+  std::filesystem::path models_dir;
   double seg_noise = 0.0;  ///< > 0: built-in noisy segmentation of ground-truth labels (flicker rate)
   size_t max_frames = 0;   ///< 0 = all
   bool evaluate = true;    ///< evaluation figures when ground truth exists
@@ -71,6 +77,9 @@ struct RunResult {
   /// --resume given, but no frame relocalised into the saved map: the recording was mapped on
   /// its own (issue 19: never merged at a guessed pose).
   bool not_merged = false;
+  /// The folder the default models came from (the segmenter "default" found them; the models
+  /// themselves are named in mapper.segmenter); empty otherwise.
+  std::filesystem::path default_models_dir;
   Evaluation evaluation;
   std::map<std::string, TimingSummary> timings;
 };
@@ -82,9 +91,36 @@ nlohmann::json to_json(const RunResult& result);
 /// (also written as report.json). Throws semap::Error on bad input.
 RunResult run_pipeline(const RunOptions& options, const SemapConfig& config);
 
-/// The segmenter a run uses (nullptr: none): the spec of the options or else of the config,
-/// or the built-in noisy one for seg_noise > 0. Throws semap::Error for a spec the input
-/// cannot serve (ground-truth labels on a dataset without label images, or a camera).
+// ---- default segmentation models (issue 38) ----
+
+/// File names of the default models: the ADE20K semantic model and, in order of preference,
+/// the COCO instance models (see README "Default models").
+inline constexpr const char* kDefaultSemanticModel = "deeplabv3-mnv2-ade20k32-512.onnx";
+inline constexpr std::array<const char*, 2> kDefaultInstanceModels{"yolov8n-seg-320.onnx", "yolo11n-seg-640.onnx"};
+
+/// The folders searched for the default models, in this order: `option` (--models DIR) when
+/// given, $SEMAP_MODELS_DIR when set, the install prefix's share/semap/models, then the source
+/// tree's ../shared/models (a source build).
+std::vector<std::filesystem::path> model_search_path(const std::filesystem::path& option);
+
+struct DefaultSegmenter {
+  std::string spec;           ///< empty: no folder holds a default model
+  std::filesystem::path dir;  ///< the folder the models are in
+};
+/// The first folder of `search_path` that holds a default model gives the spec:
+/// panoptic:SEMANTIC+INSTANCE when it has both kinds, else semantic:/yolo: for the one it has.
+DefaultSegmenter find_default_segmenter(const std::vector<std::filesystem::path>& search_path);
+
+/// The spec a run uses: options.segmenter, else the config's segmentation.segmenter, with
+/// "default" resolved through find_default_segmenter(model_search_path(options.models_dir))
+/// ("none" when nothing is found; `default_models_dir` gets the folder when something is).
+/// Throws semap::Error naming options.models_dir when it is given and holds no default model.
+std::string run_segmenter_spec(const RunOptions& options, const SemapConfig& config,
+                               std::filesystem::path* default_models_dir = nullptr);
+
+/// The segmenter a run uses (nullptr: none): run_segmenter_spec(), or the built-in noisy one
+/// for seg_noise > 0. Throws semap::Error for a spec the input cannot serve (ground-truth
+/// labels on a dataset without label images, or a camera).
 std::unique_ptr<Segmenter> make_run_segmenter(const RunOptions& options, const SemapConfig& config,
                                               const FrameSource& source);
 

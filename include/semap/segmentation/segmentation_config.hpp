@@ -28,6 +28,7 @@ struct YoloConfig {
   int max_detections = 100;
   double mask_threshold = 0.5;
   int min_mask_pixels = 20;
+  std::string class_names_file;
 
   void visit(ParamVisitor& v) {
     v.param("input_size", input_size, "px", "square network input; 0 = read from the ONNX graph input shape (640 when dynamic)", {0, 4096});
@@ -45,6 +46,7 @@ struct YoloConfig {
     v.param("max_detections", max_detections, "", "instances kept per frame after NMS", {1, 10000});
     v.param("mask_threshold", mask_threshold, "", "mask probability above which a pixel belongs to the instance", {0.0, 0.999, true});
     v.param("min_mask_pixels", min_mask_pixels, "px", "instances with smaller masks are dropped", {0, 1 << 24});
+    v.param("class_names_file", class_names_file, "path", "this network's class names (wins over segmentation.class_names_file; a panoptic run has two networks)");
   }
   void validate() const {
     check_param_ranges(*this, "segmentation.yolo");
@@ -67,6 +69,7 @@ struct SemanticModelConfig {
   bool swap_rb = true;
   bool probabilities = true;
   double min_confidence = 0.0;
+  std::string class_names_file;
 
   void visit(ParamVisitor& v) {
     v.param("input_width", input_width, "px", "network input width; 0 = from the ONNX graph (513 when dynamic)", {0, 4096});
@@ -77,8 +80,21 @@ struct SemanticModelConfig {
     v.param("swap_rb", swap_rb, "", "feed RGB (true) or BGR (false)");
     v.param("probabilities", probabilities, "", "output per-pixel project class probabilities (for Bayesian fusion, METHODS A6)");
     v.param("min_confidence", min_confidence, "", "pixels whose top class probability is below stay unlabelled", {0.0, 0.999});
+    v.param("class_names_file", class_names_file, "path", "this network's class names (wins over segmentation.class_names_file; a panoptic run has two networks)");
   }
   void validate() const { check_param_ranges(*this, "segmentation.semantic"); }
+};
+
+/// Panoptic segmentation from two networks (issue 38, README "Default models").
+struct PanopticConfig {
+  double min_instance_score = 0.5;  // measured on redkitchen: README "Default models"
+
+  void visit(ParamVisitor& v) {
+    v.param("min_instance_score", min_instance_score, "",
+            "instances at or above this score overwrite the semantic labels inside their masks; weaker ones only "
+            "feed the object map", {0.0, 1.0});
+  }
+  void validate() const { check_param_ranges(*this, "segmentation.panoptic"); }
 };
 
 enum class TemporalMethod { none, seed, warped };
@@ -118,7 +134,7 @@ enum class WhenBusy {
 inline constexpr EnumNames<WhenBusy, 2> kWhenBusyNames{{{WhenBusy::wait, "wait"}, {WhenBusy::drop_oldest, "drop_oldest"}}};
 
 struct SegmentationConfig {
-  std::string segmenter = "none";
+  std::string segmenter = "default";  // semap run: the default models when found (issue 38)
   int every_n_frames = 5;
   bool on_keyframes = true;
   int async_queue_size = 1;
@@ -131,22 +147,24 @@ struct SegmentationConfig {
   int threads = 0;
   YoloConfig yolo;
   SemanticModelConfig semantic;
+  PanopticConfig panoptic;
   TemporalFilterConfig temporal;
 
   void visit(ParamVisitor& v) {
-    v.param("segmenter", segmenter, "", "yolo:PATH, semantic:PATH, groundtruth, precomputed:DIR or none (geometry and colour only)");
+    v.param("segmenter", segmenter, "", "yolo:PATH, semantic:PATH, panoptic:SEMANTIC.onnx+INSTANCE.onnx, groundtruth, precomputed:DIR, none (geometry and colour only) or default (semap run: the default models when installed, else none)");
     v.param("every_n_frames", every_n_frames, "frames", "run the network on every N-th frame", {1, 1000000});
     v.param("on_keyframes", on_keyframes, "", "also run the network on tracking keyframes");
     v.param("async_queue_size", async_queue_size, "frames", "frames waiting for the network thread", {1, 64});
     v.param("when_busy", when_busy, kWhenBusyNames,
             "network busy and the queue full: wait (no scheduled frame is dropped; tracking waits for room) or "
             "drop_oldest (the oldest waiting frame is dropped; tracking never waits)");
-    v.param("class_names_file", class_names_file, "path", "model class names, one a line (index = model class id); empty: built-in COCO-80 (80 classes) or VOC-21 (21 classes)");
+    v.param("class_names_file", class_names_file, "path", "model class names, one a line (index = model class id); empty: built-in COCO-80 (80 classes), VOC-21 (21) or ADE20K-32 (32)");
     v.param("class_map", class_map, "", "comma-separated model_name=project_name overrides of the class mapping");
     v.param("register_to_depth", register_to_depth, "", "resample labels/masks to depth pixels when the colour camera is separate (METHODS B2)");
     v.param("threads", threads, "", "cv::setNumThreads when a network segmenter is created (process-wide); 0 = leave OpenCV's setting", {0, 256});
     v.section("yolo", "YOLO-seg ONNX instance segmentation (METHODS C1)", [&](ParamVisitor& s) { yolo.visit(s); });
     v.section("semantic", "semantic segmentation ONNX model (METHODS A5)", [&](ParamVisitor& s) { semantic.visit(s); });
+    v.section("panoptic", "panoptic:SEMANTIC+INSTANCE: how the two networks combine (issue 38)", [&](ParamVisitor& s) { panoptic.visit(s); });
     v.section("temporal", "temporal label filter (METHODS B1)", [&](ParamVisitor& s) { temporal.visit(s); });
   }
   void validate() const {
@@ -156,6 +174,7 @@ struct SegmentationConfig {
                     "entries must read model_name=project_name");
     yolo.validate();
     semantic.validate();
+    panoptic.validate();
     temporal.validate();
   }
 };
