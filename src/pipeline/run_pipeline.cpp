@@ -468,6 +468,7 @@ nlohmann::json to_json(const RunResult& r) {
   };
   if (!m.map_refresh_note.empty()) report["summary"]["map_refresh_note"] = m.map_refresh_note;
   if (r.stopped_early) report["summary"]["stopped_early"] = true;
+  if (!r.default_models_dir.empty()) report["summary"]["default_models_dir"] = r.default_models_dir.string();
   report["objects_per_class"] = r.objects_per_class;
   report["evaluation"] = to_json(r.evaluation);
   report["timings"] = timings_json(r.timings);

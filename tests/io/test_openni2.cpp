@@ -72,9 +72,11 @@ TEST(OpenNI2, RecordingOpensAsAFiniteSource) {
   if (!have_openni2_support()) SEMAP_SKIP_OR_FAIL("built without OpenNI2");
   test::TempDir dir("semap_openni2");
   const fs::path oni = dir / "dummy.oni";
-  const int recorded = record_dummy(oni, std::chrono::milliseconds(700));
+  const int recorded = record_dummy(oni, std::chrono::milliseconds(1200));
   if (recorded < 0) GTEST_SKIP() << "OpenNI2's Dummy driver is not available: " << openni::OpenNI::getExtendedError();
-  ASSERT_GT(recorded, 10);
+  // A recording of several frames is the precondition, not a measured figure: the Dummy driver's
+  // rate falls on a loaded machine (10 frames in 0.7 s in a clean-clone CI run, 2026-12-06).
+  ASSERT_GE(recorded, 3);
 
   const auto source = open_frame_source("openni2:" + oni.string());
   EXPECT_FALSE(source->is_live());
