@@ -4,13 +4,15 @@
 // parallel loops, as StageTimings records them), their sum, the process CPU of the streaming
 // part, and the budget threads x 1000 / target fps ms per frame.
 //
-//   build/bench/bench_pipeline DATASET [--segmenter none|yolo:MODEL] [--frames N] [--threads 2]
+//   build/bench/bench_pipeline DATASET [--segmenter none|yolo:MODEL|...] [--frames N] [--threads 2]
 //                              [--target-fps 30] [--config FILE]
 //
 // Stages: read (decoding, the prefetch thread), tracking (+ depth repair), integration (colour
 // registration, the TSDF with its arena's workers, the refresh archive), segmentation (the
-// segmenter's thread), objects (object map keyframes + accumulation), and OpenCV's worker
-// threads (cv::parallel_for_ of any stage: the network, image operations; not split by stage).
+// segmenter's thread; a panoptic segmenter's instance network) and semantic_segmentation (a
+// panoptic segmenter's semantic network on its own thread and schedule, issue 38), objects
+// (object map keyframes + accumulation), and OpenCV's worker threads (cv::parallel_for_ of any
+// stage: the network, image operations; not split by stage).
 // The objects stage may still drain queued keyframes after reading ended: its CPU is counted
 // whole, so the sum can exceed the process CPU of the streaming part.
 #include <cstdio>
@@ -38,7 +40,8 @@ const std::vector<BudgetStage> kStages = {
     {"read", {"read"}},
     {"tracking", {"tracking", "depth_repair"}},
     {"integration", {"tsdf_integration"}},  // refresh_archive runs inside it
-    {"segmentation", {"segmentation"}},
+    {"segmentation", {"segmentation"}},                    // the segmenter, or a panoptic one's instance network
+    {"semantic_segmentation", {"semantic_segmentation"}},  // a panoptic segmenter's semantic network
     {"objects", {"object_map", "object_accumulate"}},
 };
 
@@ -93,6 +96,7 @@ int main(int argc, char** argv) {
   out["segmenter"] = r.mapper.segmenter;
   out["frames"] = r.frames_read + r.frames_skipped;
   out["segmented_frames"] = r.mapper.segmented_frames;
+  out["semantic_segmented_frames"] = r.mapper.semantic_segmented_frames;
   out["threads"] = threads;
   out["fps_online"] = r.fps_online;
   out["fps_end_to_end"] = r.fps_end_to_end;

@@ -82,7 +82,8 @@ struct MapperStats {
   size_t frames_fused = 0;      ///< frames integrated into the TSDF
   size_t keyframes = 0, lost_frames = 0, relocalisations = 0, loop_edges = 0, optimisations = 0;
   size_t local_edges = 0;  ///< keyframe-to-nearby-keyframe pose-graph edges (tracking.local_edge_keyframes)
-  size_t segmented_frames = 0;       ///< frames the segmenter ran on (or that came with labels)
+  size_t segmented_frames = 0;       ///< frames the segmenter ran on (or that came with labels); panoptic: its instance network
+  size_t semantic_segmented_frames = 0;  ///< panoptic: frames its semantic network ran on (its own schedule)
   size_t segmentations_dropped = 0;  ///< requests dropped because the network was busy
   size_t segmentations_failed = 0;   ///< the segmenter threw on the frame (warned)
   std::string segmentation_error;    ///< the first such error

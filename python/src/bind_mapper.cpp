@@ -116,6 +116,7 @@ class PyMapper {
     d["lost_frames"] = s.lost_frames, d["relocalisations"] = s.relocalisations, d["loop_edges"] = s.loop_edges;
     d["local_edges"] = s.local_edges;
     d["optimisations"] = s.optimisations, d["segmented_frames"] = s.segmented_frames;
+    d["semantic_segmented_frames"] = s.semantic_segmented_frames;
     d["segmentations_dropped"] = s.segmentations_dropped, d["segmentations_failed"] = s.segmentations_failed;
     d["segmentation_error"] = s.segmentation_error, d["object_frames"] = s.object_frames, d["objects"] = s.objects;
     d["finished"] = s.finished, d["map_refreshed"] = s.map_refreshed, d["map_refresh_note"] = s.map_refresh_note;

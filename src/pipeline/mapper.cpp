@@ -16,7 +16,9 @@
 #include "pipeline/stage.hpp"
 #include <opencv2/imgproc.hpp>
 
+#include "pipeline/segmentation_channel.hpp"
 #include "segmentation/groundtruth_segmenter.hpp"
+#include "segmentation/panoptic_segmenter.hpp"
 #include "segmentation/registration.hpp"
 #include "semap/segmentation/segmenter_factory.hpp"
 #include "segmentation/temporal_filter.hpp"
@@ -39,7 +41,9 @@ struct TrackedFrame {
   Frame frame;  ///< depth is the repaired depth used for tracking
   cv::Mat decoded_depth;  ///< the depth as given (before repair), for the refresh archive
   Pose T_world_camera;
-  bool segment = false;      ///< its labels are on their way; fusion waits for them
+  bool awaits_primary = false;   ///< the primary network's labels are on their way; fusion waits for them
+  bool awaits_semantic = false;  ///< the same for a panoptic run's semantic network
+  std::optional<SegmentationResult> primary_result, semantic_result;  ///< arrived (nullopt: dropped or failed)
   bool map_objects = false;  ///< its segmentation also feeds the object map (C2-C4)
   bool held = false;         ///< no pose yet (see FrameLog::held)
 };
@@ -50,32 +54,6 @@ struct ObjectWork {
   SegmentationResult segmentation;
   Pose T_world_camera;
   bool keyframe = true;  ///< false: a segmented frame between object keyframes (ObjectMapper::accumulate)
-};
-
-/// Segmentation results keyed by sequence number, from the segmentation stage (or the caller)
-/// to fusion. nullopt inside means "dropped or failed".
-class SegmentationResults {
- public:
-  void put(size_t sequence, std::optional<SegmentationResult> result) {
-    std::lock_guard lock(mutex_);
-    results_[sequence] = std::move(result);
-    ready_.notify_all();
-  }
-  /// The result if it has arrived (blocking: waits for it).
-  std::optional<std::optional<SegmentationResult>> take(size_t sequence, bool block) {
-    std::unique_lock lock(mutex_);
-    if (block) ready_.wait(lock, [&] { return results_.count(sequence) > 0; });
-    const auto it = results_.find(sequence);
-    if (it == results_.end()) return std::nullopt;
-    auto out = std::move(it->second);
-    results_.erase(it);
-    return out;
-  }
-
- private:
-  std::mutex mutex_;
-  std::condition_variable ready_;
-  std::map<size_t, std::optional<SegmentationResult>> results_;
 };
 
 /// What the Mapper remembers of every frame it was given.
@@ -149,19 +127,21 @@ struct Mapper::Impl {
     objects_stage = std::make_unique<Stage<ObjectWork>>(threaded, queue, [this](ObjectWork& w) { map_objects(w); });
     fusion_stage = std::make_unique<Stage<TrackedFrame>>(
         threaded, queue, [this](TrackedFrame& f) { on_located(f); }, [this] { fuse_waiting(true); });
-    segmentation_stage = std::make_unique<Stage<Frame>>(
-        threaded, static_cast<size_t>(c.segmentation.async_queue_size), [this](Frame& f) { segment(f); });
+    make_segmentation_channels();
   }
 
   // --- tracking (caller's thread) ---
   void check_frame(const Frame& frame) const;
   TrackedFrame locate(const Frame& frame, const std::optional<Pose>& given, FrameResult& result);
   // --- segmentation ---
+  void make_segmentation_channels();
   void schedule_segmentation(TrackedFrame& item, bool keyframe, std::optional<SegmentationResult> given);
-  void segment(Frame& frame);
+  void on_segmentation_failure(const std::string& what);
   // --- fusion (fusion stage) ---
   void on_located(TrackedFrame& item);
   void fuse_waiting(bool block);
+  bool collect_segmentation(TrackedFrame& item, bool block);
+  std::optional<SegmentationResult> combined_segmentation(TrackedFrame& item) const;
   void fuse(TrackedFrame& item, const std::optional<SegmentationResult>& seg);
   void register_colour(Frame& frame) const;
   void archive_for_refresh(const TrackedFrame& item);
@@ -188,7 +168,6 @@ struct Mapper::Impl {
   ObjectMapper objects;
   mutable std::mutex objects_mutex;
   TemporalLabelFilter temporal_filter;  ///< fusion thread only (sees frames in order)
-  SegmentationResults seg_results;
   LabelArchive label_archive;
   RepairArchive repair_archive;
   FrameArchive frame_archive;
@@ -199,7 +178,8 @@ struct Mapper::Impl {
   std::vector<FrameLog> log;  ///< index = sequence number
   std::string first_segmentation_error;  ///< under log_mutex
   std::map<size_t, TrackedFrame> waiting;  ///< fusion thread: frames held until their labels arrive
-  std::atomic<size_t> frames_fused{0}, segmented{0}, dropped{0}, failed{0}, object_frames{0}, skipped_accumulations{0};
+  std::atomic<size_t> frames_fused{0}, object_frames{0}, skipped_accumulations{0};
+  double min_instance_score = 0.0;  ///< panoptic: instances that overwrite the semantic labels
   std::atomic<size_t> objects_in_map{0};
   MapperStats final_stats;  ///< the parts only finish() knows
   std::string config_yaml;  ///< the config section (the loaded file's text when it came with the map)
@@ -210,7 +190,9 @@ struct Mapper::Impl {
   // Stages last: destroyed first (segmentation, then fusion, then objects), each drained.
   std::unique_ptr<Stage<ObjectWork>> objects_stage;
   std::unique_ptr<Stage<TrackedFrame>> fusion_stage;
-  std::unique_ptr<Stage<Frame>> segmentation_stage;
+  // The primary channel runs the segmenter (a panoptic one's instance network) and feeds the object
+  // map; a panoptic run's semantic network has its own channel and schedule (issue 38).
+  std::unique_ptr<SegmentationChannel> primary_channel, semantic_channel;
 };
 
 void Mapper::Impl::check_frame(const Frame& frame) const {
@@ -253,50 +235,43 @@ TrackedFrame Mapper::Impl::locate(const Frame& frame, const std::optional<Pose>&
   return item;
 }
 
-void Mapper::Impl::schedule_segmentation(TrackedFrame& item, bool keyframe, std::optional<SegmentationResult> given) {
+void Mapper::Impl::make_segmentation_channels() {
   const SegmentationConfig& sc = config.segmentation;
+  SegmentationChannel::Options options{"segmentation", {sc.every_n_frames, sc.on_keyframes}, config.pipeline.threads > 1,
+                                       static_cast<size_t>(sc.async_queue_size), sc.when_busy};
+  const auto on_failure = [this](const std::string& what) { on_segmentation_failure(what); };
+  auto* panoptic = dynamic_cast<PanopticSegmenter*>(segmenter.get());
+  Segmenter* primary = panoptic ? &panoptic->instance() : segmenter.get();
+  primary_channel = std::make_unique<SegmentationChannel>(primary, options, timings, on_failure);
+  if (!panoptic) return;
+  min_instance_score = panoptic->min_instance_score();
+  options.timing_name = "semantic_segmentation";
+  options.schedule = {sc.panoptic.semantic_every_n_frames, sc.panoptic.semantic_on_keyframes};
+  semantic_channel = std::make_unique<SegmentationChannel>(&panoptic->semantic(), options, timings, on_failure);
+}
+
+void Mapper::Impl::on_segmentation_failure(const std::string& what) {
+  std::lock_guard lock(log_mutex);
+  if (first_segmentation_error.empty()) first_segmentation_error = what;
+}
+
+void Mapper::Impl::schedule_segmentation(TrackedFrame& item, bool keyframe, std::optional<SegmentationResult> given) {
   const size_t sequence = item.frame.index;
-  item.map_objects = (keyframe && sc.on_keyframes) || sequence % static_cast<size_t>(sc.every_n_frames) == 0;
+  item.map_objects = primary_channel->schedule().wants(sequence, keyframe);
   if (given) {
-    item.segment = true;
-    ++segmented;
-    given->frame_index = sequence;
-    seg_results.put(sequence, std::move(given));
+    item.awaits_primary = true;
+    primary_channel->put(sequence, std::move(given));
     return;
   }
   item.map_objects = item.map_objects && segmenter;
-  item.segment = item.map_objects || (segmenter && segmenter->is_cheap());
-  if (!item.segment) return;
-  ++segmented;
-  if (sc.when_busy == WhenBusy::wait) return segmentation_stage->push(item.frame);
-  if (auto oldest = segmentation_stage->push_drop_oldest(item.frame)) {
-    ++dropped;
-    --segmented;
-    seg_results.put(oldest->index, std::nullopt);  // fusion then fuses it without labels
-  }
-}
-
-void Mapper::Impl::segment(Frame& frame) {
-  // Never throws: fusion waits for a result (or nullopt) of every frame sent here.
-  const StageStart t0 = StageStart::now();
-  try {
-    SegmentationResult r = segmenter->segment(frame);
-    r.frame_index = frame.index;
-    timings.add("segmentation", t0);
-    seg_results.put(frame.index, std::move(r));
-  } catch (const std::exception& e) {
-    spdlog::warn("segmentation of {} failed: {}", frame.rgb_path.empty() ? "frame " + std::to_string(frame.index)
-                                                                          : frame.rgb_path, e.what());
-    if (failed++ == 0) {
-      std::lock_guard lock(log_mutex);
-      first_segmentation_error = e.what();
-    }
-    seg_results.put(frame.index, std::nullopt);
-  }
+  item.awaits_primary = item.map_objects || (segmenter && segmenter->is_cheap());
+  if (item.awaits_primary) primary_channel->send(item.frame);
+  item.awaits_semantic = semantic_channel && semantic_channel->schedule().wants(sequence, keyframe);
+  if (item.awaits_semantic) semantic_channel->send(item.frame);
 }
 
 void Mapper::Impl::on_located(TrackedFrame& item) {
-  if (item.segment) {
+  if (item.awaits_primary || item.awaits_semantic) {
     const size_t sequence = item.frame.index;
     waiting.emplace(sequence, std::move(item));
   } else {
@@ -309,13 +284,42 @@ void Mapper::Impl::fuse_waiting(bool block) {
   // In frame order: the object map and the temporal filter see frames as they were taken.
   while (!waiting.empty()) {
     auto it = waiting.begin();
-    auto result = seg_results.take(it->first, block);
-    if (!result) return;
+    if (!collect_segmentation(it->second, block)) return;
     TrackedFrame item = std::move(it->second);
     waiting.erase(it);
-    fuse(item, *result);
-    if (*result) hand_to_objects(item, std::move(**result));
+    const bool to_objects = item.primary_result.has_value();  // semantic labels alone carry no instances
+    std::optional<SegmentationResult> seg = combined_segmentation(item);
+    fuse(item, seg);
+    if (seg && to_objects) hand_to_objects(item, std::move(*seg));
   }
+}
+
+bool Mapper::Impl::collect_segmentation(TrackedFrame& item, bool block) {
+  const size_t sequence = item.frame.index;
+  if (item.awaits_primary) {
+    auto result = primary_channel->take(sequence, block);
+    if (!result) return false;
+    item.primary_result = std::move(*result);
+    item.awaits_primary = false;
+  }
+  if (item.awaits_semantic) {
+    auto result = semantic_channel->take(sequence, block);
+    if (!result) return false;
+    item.semantic_result = std::move(*result);
+    item.awaits_semantic = false;
+  }
+  return true;
+}
+
+std::optional<SegmentationResult> Mapper::Impl::combined_segmentation(TrackedFrame& item) const {
+  if (!semantic_channel) return std::move(item.primary_result);
+  // Panoptic (issue 38): the instances win inside their masks, the semantic labels fill the rest;
+  // a frame only one network saw gets that network's labels.
+  if (!item.primary_result) return std::move(item.semantic_result);
+  SegmentationResult semantic = item.semantic_result ? std::move(*item.semantic_result) : SegmentationResult{};
+  SegmentationResult out = combine_panoptic(std::move(semantic), *item.primary_result, min_instance_score);
+  out.frame_index = item.frame.index;
+  return out;
 }
 
 void Mapper::Impl::fuse(TrackedFrame& item, const std::optional<SegmentationResult>& seg) {
@@ -513,7 +517,7 @@ FrameResult Mapper::add_frame(const Frame& frame, FrameHints hints) {
   }
   if (result.fused) {
     m.schedule_segmentation(item, result.status == FrameStatus::keyframe, std::move(hints.segmentation));
-    result.segmented = item.segment;
+    result.segmented = item.awaits_primary || item.awaits_semantic;
     m.fusion_stage->push(std::move(item));
   }
   result.total_ms = ms_since(t0);
@@ -523,7 +527,8 @@ FrameResult Mapper::add_frame(const Frame& frame, FrameHints hints) {
 void Mapper::finish() {
   Impl& m = *impl_;
   if (m.finished) return;
-  m.segmentation_stage->close();
+  m.primary_channel->close();
+  if (m.semantic_channel) m.semantic_channel->close();
   m.fusion_stage->close();
   m.objects_stage->close();
   if (m.tracker) {
@@ -618,9 +623,14 @@ MapperStats Mapper::stats() const {
     s.held_frames = t.held_frames;
   }
   s.frames_fused = m.frames_fused;
-  s.segmented_frames = m.segmented;
-  s.segmentations_dropped = m.dropped;
-  s.segmentations_failed = m.failed;
+  s.segmented_frames = m.primary_channel->segmented();
+  s.segmentations_dropped = m.primary_channel->dropped();
+  s.segmentations_failed = m.primary_channel->failed();
+  if (m.semantic_channel) {
+    s.semantic_segmented_frames = m.semantic_channel->segmented();
+    s.segmentations_dropped += m.semantic_channel->dropped();
+    s.segmentations_failed += m.semantic_channel->failed();
+  }
   s.object_frames = m.object_frames;
   s.object_accumulations_skipped = m.skipped_accumulations;
   s.objects = m.objects_in_map;  // not the objects lock: the object stage may hold it for long

@@ -442,6 +442,7 @@ nlohmann::json to_json(const RunResult& r) {
       {"frames_lost", m.lost_frames},
       {"keyframes", m.keyframes},
       {"segmented_frames", m.segmented_frames},
+      {"semantic_segmented_frames", m.semantic_segmented_frames},
       {"segmentations_dropped", m.segmentations_dropped},
       {"segmentations_failed", m.segmentations_failed},
       {"object_frames", m.object_frames},

@@ -36,8 +36,8 @@ class PanopticSegmenter : public Segmenter {
     double semantic_ms = 0.0, instance_ms = 0.0, combine_ms = 0.0;
   };
 
-  /// Both segmenters work on the colour image (no depth registration: the caller registers the
-  /// combined result once). Throws semap::Error when either is null.
+  /// Both results must have the same size: make_segmenter() registers each network's result to
+  /// depth pixels when the camera needs it. Throws semap::Error when either is null.
   PanopticSegmenter(std::unique_ptr<Segmenter> semantic, std::unique_ptr<Segmenter> instance,
                     double min_instance_score = 0.0);
 
@@ -46,6 +46,11 @@ class PanopticSegmenter : public Segmenter {
   /// make_segmenter() accepts, naming both models (report.json).
   std::string name() const override;
   const Timing& last_timing() const { return timing_; }
+  /// The two networks, for a caller that schedules each on its own frames (the Mapper, issue 38)
+  /// and combines them with combine_panoptic(). Not thread-safe against segment().
+  Segmenter& semantic() { return *semantic_; }
+  Segmenter& instance() { return *instance_; }
+  double min_instance_score() const { return min_instance_score_; }
 
  private:
   std::unique_ptr<Segmenter> semantic_, instance_;

@@ -67,21 +67,25 @@ std::unique_ptr<Segmenter> make_segmenter(const std::string& spec, const Segment
     throw Error("segmenter '" + spec + "'", "unknown spec: use yolo:PATH, semantic:PATH, panoptic:SEMANTIC+INSTANCE, groundtruth, precomputed:DIR or none");
   }
   if (path.empty()) throw Error("segmenter '" + spec + "'", "missing path after '" + kind + ":'");
+  const auto registered = [&](std::unique_ptr<Segmenter> seg) -> std::unique_ptr<Segmenter> {
+    if (!config.register_to_depth || !needs_registration(camera)) return seg;
+    return std::make_unique<DepthRegisteredSegmenter>(std::move(seg), camera);
+  };
   std::unique_ptr<Segmenter> seg;
   if (kind == "yolo") seg = std::make_unique<YoloSegmenter>(path, config);
   else if (kind == "semantic") seg = std::make_unique<SemanticSegmenter>(path, config);
   else if (kind == "precomputed") seg = std::make_unique<PrecomputedSegmenter>(path, config);
   else if (kind == "panoptic") {
+    // Each network registered on its own: the Mapper runs them on their own frames (issue 38).
     const auto [semantic_path, instance_path] = split_panoptic(spec, path);
-    auto semantic = std::make_unique<SemanticSegmenter>(semantic_path, config);  // first: its errors first
-    seg = std::make_unique<PanopticSegmenter>(std::move(semantic), std::make_unique<YoloSegmenter>(instance_path, config),
-                                              config.panoptic.min_instance_score);
+    auto semantic = registered(std::make_unique<SemanticSegmenter>(semantic_path, config));  // first: its errors first
+    return std::make_unique<PanopticSegmenter>(std::move(semantic),
+                                               registered(std::make_unique<YoloSegmenter>(instance_path, config)),
+                                               config.panoptic.min_instance_score);
   } else
     throw Error("segmenter '" + spec + "'",
                 "unknown kind '" + kind + "': use yolo, semantic, panoptic, precomputed, groundtruth or none");
-  if (config.register_to_depth && needs_registration(camera))
-    seg = std::make_unique<DepthRegisteredSegmenter>(std::move(seg), camera);
-  return seg;
+  return registered(std::move(seg));
 }
 
 }  // namespace semap

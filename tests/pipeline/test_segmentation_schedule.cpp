@@ -10,8 +10,10 @@
 #include <condition_variable>
 #include <future>
 #include <mutex>
+#include <map>
 #include <set>
 
+#include "segmentation/panoptic_segmenter.hpp"
 #include "semap/mapper.hpp"
 #include "test_support.hpp"
 
@@ -148,6 +150,85 @@ TEST(SegmentationSchedule, WaitDropsNothingAndHoldsTheCallerWhileTheQueueIsFull)
   EXPECT_EQ(stats.segmented_frames, kFrames);
   EXPECT_EQ(stats.frames_fused, kFrames);
 }
+
+/// Records the frames it ran on. Semantic: `wall` on the right two thirds of the image, nothing on
+/// the left third; instance: one cup covering the left third.
+class RecordingSegmenter : public Segmenter {
+ public:
+  explicit RecordingSegmenter(bool instances) : instances_(instances) {}
+  SegmentationResult segment(const Frame& frame) override {
+    {
+      std::lock_guard lock(mutex_);
+      seen_.insert(frame.index);
+    }
+    const cv::Rect left(0, 0, frame.depth.cols / 3, frame.depth.rows);
+    SegmentationResult r;
+    if (!instances_) {
+      r.labels = cv::Mat(frame.depth.size(), CV_8UC1, cv::Scalar(static_cast<int>(Label::kWall)));
+      r.labels(left).setTo(0);
+      return r;
+    }
+    InstanceDetection cup;
+    cup.id = 1;
+    cup.class_id = static_cast<ClassId>(Label::kCup);
+    cup.score = 0.9f;
+    cup.mask = cv::Mat::zeros(frame.depth.size(), CV_8UC1);
+    cup.mask(left).setTo(255);
+    cup.box = left;
+    r.instances.push_back(cup);
+    return r;
+  }
+  std::string name() const override { return instances_ ? "instances" : "semantic"; }
+  std::set<size_t> seen() const {
+    std::lock_guard lock(mutex_);
+    return seen_;
+  }
+
+ private:
+  const bool instances_;
+  mutable std::mutex mutex_;
+  std::set<size_t> seen_;
+};
+
+/// Issue 38: each network of a panoptic segmenter on its own frames. The instance network follows
+/// segmentation.every_n_frames and alone feeds the object map; the semantic network follows
+/// segmentation.panoptic.semantic_every_n_frames; the TSDF gets the labels of both.
+void expect_networks_on_their_own_frames(int threads) {
+  SemapConfig config;
+  config.pipeline.threads = threads;
+  config.tsdf.voxel_size = 0.05;
+  config.segmentation.every_n_frames = 4;
+  config.segmentation.panoptic.semantic_every_n_frames = 3;
+  auto semantic = std::make_unique<RecordingSegmenter>(false);
+  auto instance = std::make_unique<RecordingSegmenter>(true);
+  const RecordingSegmenter& semantic_net = *semantic;
+  const RecordingSegmenter& instance_net = *instance;
+  Mapper mapper(config, small_camera(),
+                std::make_unique<PanopticSegmenter>(std::move(semantic), std::move(instance), 0.5));
+  for (size_t i = 0; i < kFrames; ++i) {
+    auto [frame, hints] = wall_frame(i);
+    mapper.add_frame(frame, hints);  // given poses: no tracking keyframes
+  }
+  mapper.finish();
+
+  EXPECT_EQ(instance_net.seen(), (std::set<size_t>{0, 4, 8}));
+  EXPECT_EQ(semantic_net.seen(), (std::set<size_t>{0, 3, 6, 9}));
+  const MapperStats stats = mapper.stats();
+  EXPECT_EQ(stats.segmented_frames, 3u);
+  EXPECT_EQ(stats.semantic_segmented_frames, 4u);
+  EXPECT_EQ(stats.object_frames, 3u) << "only the instance network's frames feed the object map";
+  EXPECT_EQ(stats.frames_fused, kFrames);
+  const TriangleMesh mesh = mapper.mesh();
+  ASSERT_FALSE(mesh.vertices.labels.empty());
+  std::map<ClassId, size_t> count;
+  for (const ClassId label : mesh.vertices.labels) ++count[label];
+  const double n = static_cast<double>(mesh.vertices.labels.size());
+  EXPECT_GT(count[static_cast<ClassId>(Label::kWall)] / n, 0.4) << "semantic labels reached the TSDF";
+  EXPECT_GT(count[static_cast<ClassId>(Label::kCup)] / n, 0.1) << "instance labels reached the TSDF";
+}
+
+TEST(SegmentationSchedule, PanopticNetworksRunOnTheirOwnFramesInline) { expect_networks_on_their_own_frames(1); }
+TEST(SegmentationSchedule, PanopticNetworksRunOnTheirOwnFramesThreaded) { expect_networks_on_their_own_frames(2); }
 
 }  // namespace
 }  // namespace semap

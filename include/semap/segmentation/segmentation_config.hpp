@@ -88,8 +88,17 @@ struct SemanticModelConfig {
 /// Panoptic segmentation from two networks (issue 38, README "Default models").
 struct PanopticConfig {
   double min_instance_score = 0.5;  // measured on redkitchen: README "Default models"
+  // The semantic network costs several times the instance network (README "Default models"): on
+  // its own, sparser schedule the surfaces still get labels from many views (the camera moves a
+  // few cm between frames at 30 Hz) while tracking and the instance network keep their rate.
+  int semantic_every_n_frames = 10;
+  bool semantic_on_keyframes = true;
 
   void visit(ParamVisitor& v) {
+    v.param("semantic_every_n_frames", semantic_every_n_frames, "frames",
+            "run the semantic network on every N-th frame (the instance network follows segmentation.every_n_frames)",
+            {1, 1000000});
+    v.param("semantic_on_keyframes", semantic_on_keyframes, "", "also run the semantic network on tracking keyframes");
     v.param("min_instance_score", min_instance_score, "",
             "instances at or above this score overwrite the semantic labels inside their masks; weaker ones only "
             "feed the object map", {0.0, 1.0});
