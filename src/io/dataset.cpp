@@ -64,6 +64,7 @@ std::unique_ptr<DatasetReader> open_file(const fs::path& file, const DatasetOpti
   const std::string ext = lower_extension(file);
   if (ext == ".bag") return io_detail::open_rosbag(file, options);
   if (ext == ".db3" || ext == ".mcap") return io_detail::open_rosbag2(file, options);
+  if (file.filename() == "metadata.yaml") return io_detail::open_rosbag2(file.parent_path(), options);  // a rosbag2 folder's
   if (ext == ".sens") return io_detail::open_scannet_sens(file);
   throw Error(file, "not a folder (expected a dataset folder, a ROS .bag, a rosbag2 .db3 / .mcap or a ScanNet .sens file)");
 }

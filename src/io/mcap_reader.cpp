@@ -255,6 +255,8 @@ void McapReader::index_by_scan() {
     pos += kRecordHeaderBytes + n;
   }
   // No data end record: the recording was cut off (or the file truncated later).
+  if (messages_.empty())
+    throw Error(path_, "truncated MCAP file: ends at byte " + num(pos) + " of its data section before any complete message");
   spdlog::warn("{}: MCAP file ends inside its data section at byte {} (recording cut off?); reading the {} complete "
                "messages before it",
                path_.string(), pos, messages_.size());
