@@ -39,11 +39,11 @@ void add_run_command(CLI::App& app, CommandRunner& run) {
   };
   auto args = std::make_shared<Args>();
   cmd->add_option("dataset", args->options.dataset,
-                  "dataset folder or file (TUM, 7-Scenes, YCB-Video, ScanNet, synthetic, dataset.yaml, ROS .bag) or a "
+                  "dataset folder or file (TUM, 7-Scenes, YCB-Video, ScanNet, synthetic, dataset.yaml, ROS .bag, rosbag2 folder / .db3 / .mcap) or a "
                   "camera (openni2:, openni2:URI, openni2:FILE.oni)")
       ->required();
-  cmd->add_option("--rgb-topic", args->options.dataset_options.rgb_topic, "ROS bag: the colour image topic (default: the only one)");
-  cmd->add_option("--depth-topic", args->options.dataset_options.depth_topic, "ROS bag: the depth image topic (default: the only one)");
+  cmd->add_option("--rgb-topic", args->options.dataset_options.rgb_topic, "ROS bag / rosbag2: the colour image topic (default: the only one)");
+  cmd->add_option("--depth-topic", args->options.dataset_options.depth_topic, "ROS bag / rosbag2: the depth image topic (default: the only one)");
   cmd->add_option("--out", args->options.out_dir, "output folder")->required();
   cmd->add_option("--config", args->config_path, "YAML config (see `semap config --dump`)");
   cmd->add_option("--resume", args->options.resume_from,

@@ -9,6 +9,7 @@
 #include "core/lens_undistortion.hpp"
 #include "io/dataset_layouts.hpp"
 #include "io/image_io.hpp"
+#include "io/rosbag2_bag.hpp"
 #include "io/rosbag_backend.hpp"
 
 namespace semap {
@@ -62,8 +63,10 @@ std::string lower_extension(const fs::path& path) {
 std::unique_ptr<DatasetReader> open_file(const fs::path& file, const DatasetOptions& options) {
   const std::string ext = lower_extension(file);
   if (ext == ".bag") return io_detail::open_rosbag(file, options);
+  if (ext == ".db3" || ext == ".mcap") return io_detail::open_rosbag2(file, options);
+  if (file.filename() == "metadata.yaml") return io_detail::open_rosbag2(file.parent_path(), options);  // a rosbag2 folder's
   if (ext == ".sens") return io_detail::open_scannet_sens(file);
-  throw Error(file, "not a folder (expected a dataset folder, a ROS .bag or a ScanNet .sens file)");
+  throw Error(file, "not a folder (expected a dataset folder, a ROS .bag, a rosbag2 .db3 / .mcap or a ScanNet .sens file)");
 }
 
 std::unique_ptr<DatasetReader> open_layout(const fs::path& root, const DatasetOptions& options);
@@ -155,7 +158,7 @@ std::unique_ptr<DatasetReader> open_dataset(const fs::path& folder, const Datase
   if (root.has_parent_path() && root.filename().empty()) root = root.parent_path();  // "dir/" -> "dir"
   std::error_code ec;
   const std::string ext = lower_extension(root);
-  const bool file_format = ext == ".bag" || ext == ".sens";
+  const bool file_format = ext == ".bag" || ext == ".sens" || ext == ".db3" || ext == ".mcap";
   if (!fs::exists(root, ec)) throw Error(root, file_format ? "file not found" : "dataset folder not found");
   const bool is_folder = fs::is_directory(root, ec);
   if (!is_folder && !fs::is_regular_file(root, ec))
@@ -173,6 +176,7 @@ namespace {
 std::unique_ptr<DatasetReader> open_layout(const fs::path& root, const DatasetOptions& options) {
   std::optional<io_detail::DatasetYaml> yaml;
   if (fs::exists(root / "dataset.yaml")) yaml = io_detail::read_dataset_yaml(root / "dataset.yaml");
+  if (!yaml && io_detail::is_rosbag2_folder(root)) return io_detail::open_rosbag2(root, options);
   const std::string layout = yaml && !yaml->format.empty() ? yaml->format : detect_layout(root);
   const io_detail::DatasetYaml* y = yaml ? &*yaml : nullptr;
   std::unique_ptr<DatasetReader> reader;

@@ -72,6 +72,8 @@ std::unique_ptr<DatasetReader> open_scannet(const std::filesystem::path& root, c
 std::unique_ptr<DatasetReader> open_scannet_sens(const std::filesystem::path& file);
 /// ROS1 bag (rosbag_dataset.cpp): colour and depth image topics associated by timestamp.
 std::unique_ptr<DatasetReader> open_rosbag(const std::filesystem::path& bag, const DatasetOptions& options);
+/// rosbag2 (issue 40, rosbag2_bag.hpp): a bag folder or one .db3 / .mcap file, read like a ROS1 bag.
+std::unique_ptr<DatasetReader> open_rosbag2(const std::filesystem::path& bag, const DatasetOptions& options);
 
 /// rgb <-> depth records from two lists associated by timestamp (max 0.02 s, one-to-one);
 /// frame timestamp = rgb timestamp; unmatched rgb frames are dropped.

@@ -19,7 +19,7 @@ enum class MessageType { image, compressed_image, camera_info, other };
 
 struct Topic {
   std::string name;
-  std::string datatype;  ///< "sensor_msgs/Image", ...
+  std::string datatype;  ///< "sensor_msgs/Image" (ROS1), "sensor_msgs/msg/Image" (ROS 2), ...
   MessageType type = MessageType::other;
   size_t messages = 0;
 };
@@ -63,28 +63,44 @@ struct CameraInfoData {
   std::vector<double> D;
 };
 
-/// A bag opened for reading. Thread-safe: reads are serialised inside (rosbag is not).
-/// Every failure throws semap::Error naming the bag file.
-class Bag {
+/// Messages of a recording, whatever its storage: the ROS1 Bag below and the rosbag2 reader
+/// (rosbag2_bag.hpp) both serve the dataset reader of rosbag_dataset.cpp through this.
+/// Thread-safe: implementations serialise their reads inside. Every failure throws
+/// semap::Error naming the file.
+class BagSource {
+ public:
+  virtual ~BagSource() = default;
+  virtual const std::filesystem::path& path() const = 0;
+  virtual std::vector<Topic> topics() const = 0;
+  /// Metadata of the first message on an image or compressed-image topic.
+  virtual ImageMeta first_image_meta(const std::string& topic) const = 0;
+  /// The first message on a compressed-image topic.
+  virtual CompressedData first_compressed(const std::string& topic) const = 0;
+  /// The first CameraInfo message on the topic.
+  virtual CameraInfoData first_camera_info(const std::string& topic) const = 0;
+  /// Every message of the given image topics in recording order, with its metadata; reads
+  /// each message once (the pixels are not kept).
+  virtual std::vector<IndexedMessage> index(const std::vector<std::string>& topics) const = 0;
+  virtual ImageData read_image(size_t handle) const = 0;
+  virtual CompressedData read_compressed(size_t handle) const = 0;
+};
+
+/// A ROS1 bag opened for reading (rosbag is not thread-safe: reads are serialised inside).
+class Bag final : public BagSource {
  public:
   explicit Bag(const std::filesystem::path& path);
-  ~Bag();
+  ~Bag() override;
   Bag(const Bag&) = delete;
   Bag& operator=(const Bag&) = delete;
 
-  const std::filesystem::path& path() const;
-  std::vector<Topic> topics() const;
-  /// Metadata of the first message on an image or compressed-image topic.
-  ImageMeta first_image_meta(const std::string& topic) const;
-  /// The first message on a compressed-image topic.
-  CompressedData first_compressed(const std::string& topic) const;
-  /// The first CameraInfo message on the topic.
-  CameraInfoData first_camera_info(const std::string& topic) const;
-  /// Every message of the given image topics in bag order, with its metadata; reads each
-  /// message record once (the pixels are not deserialised).
-  std::vector<IndexedMessage> index(const std::vector<std::string>& topics) const;
-  ImageData read_image(size_t handle) const;
-  CompressedData read_compressed(size_t handle) const;
+  const std::filesystem::path& path() const override;
+  std::vector<Topic> topics() const override;
+  ImageMeta first_image_meta(const std::string& topic) const override;
+  CompressedData first_compressed(const std::string& topic) const override;
+  CameraInfoData first_camera_info(const std::string& topic) const override;
+  std::vector<IndexedMessage> index(const std::vector<std::string>& topics) const override;
+  ImageData read_image(size_t handle) const override;
+  CompressedData read_compressed(size_t handle) const override;
 
  private:
   struct Impl;

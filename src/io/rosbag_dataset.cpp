@@ -1,5 +1,5 @@
-// ROS1 bags as a dataset: one colour and one depth image topic (sensor_msgs/Image or
-// CompressedImage), intrinsics from their sensor_msgs/CameraInfo (K), colour and depth
+// ROS bags as a dataset (ROS1 .bag, and rosbag2 through the same BagSource: rosbag2_bag.hpp):
+// one colour and one depth image topic (sensor_msgs/Image or CompressedImage), intrinsics from their sensor_msgs/CameraInfo (K), colour and depth
 // associated by header timestamp like the TUM lists. Opening indexes the messages (each
 // record is read once for its header, the pixels are not decoded); load(i) decodes frame i.
 #include <spdlog/spdlog.h>
@@ -17,6 +17,7 @@
 #include "io/association.hpp"
 #include "io/dataset_layouts.hpp"
 #include "io/image_io.hpp"
+#include "io/rosbag2_bag.hpp"
 #include "io/rosbag_backend.hpp"
 #include "semap/io/trajectory_io.hpp"
 
@@ -213,9 +214,10 @@ void check_layout(const rb::ImageData& im, size_t bytes_per_pixel, const std::st
   if (im.width == 0 || im.height == 0 || im.width > kMaxImageSide || im.height > kMaxImageSide)
     throw Error(where, "implausible image size " + std::to_string(im.width) + "x" + std::to_string(im.height));
   if (im.step < im.width * bytes_per_pixel) throw Error(where, "row step " + std::to_string(im.step) + " shorter than a row");
-  if (im.data.size() < size_t{im.step} * im.height)
-    throw Error(where, "image data has " + std::to_string(im.data.size()) + " bytes, expected " +
-                           std::to_string(size_t{im.step} * im.height) + " (truncated message)");
+  const size_t expected = size_t{im.step} * im.height;
+  if (im.data.size() != expected)
+    throw Error(where, "image data has " + std::to_string(im.data.size()) + " bytes, height x step is " +
+                           std::to_string(expected) + (im.data.size() < expected ? " (truncated message)" : ""));
 }
 
 cv::Mat decode_raw_colour(rb::ImageData im, const std::string& where) {
@@ -305,11 +307,11 @@ cv::Mat decode_compressed_depth(const rb::CompressedData& msg, const std::string
 
 class RosbagDataset : public DatasetReader {
  public:
-  RosbagDataset(std::unique_ptr<rb::Bag> bag, const ImageTopic& rgb, const ImageTopic& depth)
-      : bag_(std::move(bag)), rgb_(rgb), depth_(depth) {
+  RosbagDataset(std::string format, std::unique_ptr<rb::BagSource> bag, const ImageTopic& rgb, const ImageTopic& depth)
+      : format_(std::move(format)), bag_(std::move(bag)), rgb_(rgb), depth_(depth) {
     root_ = bag_->path();
   }
-  std::string format() const override { return "rosbag"; }
+  std::string format() const override { return format_; }
 
   cv::Mat decode_depth(size_t i) const override {
     check_index(i);
@@ -339,13 +341,14 @@ class RosbagDataset : public DatasetReader {
   void attach(const Trajectory& ground_truth) { attach_ground_truth(records_, ground_truth); }
 
  private:
-  std::unique_ptr<rb::Bag> bag_;
+  std::string format_;
+  std::unique_ptr<rb::BagSource> bag_;
   ImageTopic rgb_, depth_;
   std::vector<std::pair<size_t, size_t>> handles_;  ///< per frame: colour, depth message
 };
 
 /// Size and metadata of a topic's first image (a compressed one is decoded for its size).
-rb::ImageMeta first_image(const rb::Bag& bag, const ImageTopic& topic) {
+rb::ImageMeta first_image(const rb::BagSource& bag, const ImageTopic& topic) {
   rb::ImageMeta meta = bag.first_image_meta(topic.name);
   if (!topic.compressed) return meta;
   const std::string where = bag.path().string() + ":" + topic.name;
@@ -356,7 +359,7 @@ rb::ImageMeta first_image(const rb::Bag& bag, const ImageTopic& topic) {
   return meta;
 }
 
-std::vector<ImageTopic> image_topics(const rb::Bag& bag, const std::vector<rb::Topic>& topics) {
+std::vector<ImageTopic> image_topics(const rb::BagSource& bag, const std::vector<rb::Topic>& topics) {
   std::vector<ImageTopic> out;
   for (const auto& t : topics) {
     if (t.type != rb::MessageType::image && t.type != rb::MessageType::compressed_image) continue;
@@ -373,7 +376,7 @@ std::vector<ImageTopic> image_topics(const rb::Bag& bag, const std::vector<rb::T
 
 /// Depth intrinsics from the depth topic's CameraInfo (else the colour one's); a separate
 /// colour camera when the colour CameraInfo differs (extrinsic: identity, /tf is not read).
-CameraModel bag_camera(const rb::Bag& bag, const std::vector<rb::Topic>& topics, const ImageTopic& rgb,
+CameraModel bag_camera(const rb::BagSource& bag, const std::vector<rb::Topic>& topics, const ImageTopic& rgb,
                        const ImageTopic& depth) {
   const fs::path& path = bag.path();
   const rb::ImageMeta rgb_meta = first_image(bag, rgb), depth_meta = first_image(bag, depth);
@@ -404,7 +407,7 @@ CameraModel bag_camera(const rb::Bag& bag, const std::vector<rb::Topic>& topics,
   return camera;
 }
 
-void index_frames(RosbagDataset& reader, const rb::Bag& bag, const ImageTopic& rgb, const ImageTopic& depth) {
+void index_frames(RosbagDataset& reader, const rb::BagSource& bag, const ImageTopic& rgb, const ImageTopic& depth) {
   const auto messages = bag.index({rgb.name, depth.name});
   const auto rgb_stream = stream_of(messages, 0, rgb.name, bag.path());
   const auto depth_stream = stream_of(messages, 1, depth.name, bag.path());
@@ -426,21 +429,30 @@ void index_frames(RosbagDataset& reader, const rb::Bag& bag, const ImageTopic& r
 
 }  // namespace
 
-std::unique_ptr<DatasetReader> open_rosbag(const fs::path& path, const DatasetOptions& options) {
-  auto bag = std::make_unique<rb::Bag>(path);
+std::unique_ptr<DatasetReader> open_bag_source(std::unique_ptr<rb::BagSource> bag, const std::string& format,
+                                               const DatasetOptions& options) {
+  const fs::path path = bag->path();
   const auto topics = bag->topics();
   const auto images = image_topics(*bag, topics);
   const ImageTopic rgb = choose_topic(images, Role::colour, options.rgb_topic, path);
   const ImageTopic depth = choose_topic(images, Role::depth, options.depth_topic, path);
   const CameraModel camera = bag_camera(*bag, topics, rgb, depth);
-  const rb::Bag& bag_ref = *bag;
-  auto reader = std::make_unique<RosbagDataset>(std::move(bag), rgb, depth);
+  const rb::BagSource& bag_ref = *bag;
+  auto reader = std::make_unique<RosbagDataset>(format, std::move(bag), rgb, depth);
   reader->set_camera(camera);
   index_frames(*reader, bag_ref, rgb, depth);
   // TUM publishes each bag's ground truth beside it as <name>-groundtruth.txt.
   const fs::path gt = path.parent_path() / (path.stem().string() + "-groundtruth.txt");
   if (fs::exists(gt)) reader->attach(read_tum_trajectory(gt));
   return reader;
+}
+
+std::unique_ptr<DatasetReader> open_rosbag(const fs::path& path, const DatasetOptions& options) {
+  return open_bag_source(std::make_unique<rb::Bag>(path), "rosbag", options);
+}
+
+std::unique_ptr<DatasetReader> open_rosbag2(const fs::path& path, const DatasetOptions& options) {
+  return open_bag_source(open_rosbag2_source(path), "rosbag2", options);
 }
 
 }  // namespace semap::io_detail
