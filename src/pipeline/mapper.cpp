@@ -25,6 +25,7 @@
 #include "tracking/depth_repair.hpp"
 #include "tracking/tracker.hpp"
 #include "tracking/tracker_state.hpp"
+#include "tsdf/label_priors.hpp"
 #include "tsdf/map_io.hpp"
 #include "tsdf/tsdf_interpolation.hpp"
 #include "tsdf/semantic_tsdf.hpp"
@@ -578,6 +579,8 @@ TriangleMesh Mapper::mesh() const {
     std::lock_guard lock(impl_->tsdf_mutex);
     mesh = impl_->tsdf.extract_mesh();
   }
+  // Issue 38: labels that contradict their surface lose to those that fit (tsdf/label_priors.hpp).
+  apply_label_priors(mesh, estimate_gravity(mesh, trajectory()), impl_->config.tsdf);
   std::lock_guard lock(impl_->objects_mutex);
   mesh.vertices.instances =
       impl_->objects.instance_ids_for(mesh.vertices.points, static_cast<float>(1.5 * impl_->config.tsdf.voxel_size));

@@ -60,6 +60,19 @@ struct TsdfConfig {
   double mesh_min_label_probability = 0.9;  ///< Bayesian argmax shown only above this (else 0)
   int mesh_min_label_frames = 3;  ///< Bayesian argmax shown only when it leads the runner-up by this many frames' votes
 
+  // Geometry-aware label decision on the mesh (issue 38, tsdf/label_priors.hpp; gravity and the
+  // floor height from core/gravity). Each rule can be switched off to measure it.
+  bool label_prior_normals = true;   ///< floor faces up, ceiling down, wall vertical; others unlabelled
+  bool label_prior_heights = true;   ///< floor near the floor height, ceiling high (needs a floor)
+  bool label_prior_regions = true;   ///< planar regions' fitting majority fills their parts
+  double label_prior_max_tilt_deg = 20.0;       ///< normal tolerance of the class rules
+  double label_prior_floor_band_m = 0.08;       ///< floor within this of the floor height
+  double label_prior_min_ceiling_height_m = 1.8;  ///< ceiling at least this above the floor
+  double label_prior_region_normal_deg = 15.0;  ///< region: triangle normal within this of the region's
+  double label_prior_region_plane_m = 0.04;     ///< region: triangle centroid within this of its plane
+  double label_prior_region_min_area_m2 = 0.25; ///< smaller regions decide nothing
+  double label_prior_region_min_share = 0.5;    ///< the region's class holds this share of its labelled area
+
   // Memory for long runs.
   double drop_distance = 0.0;  ///< blocks farther than this from the camera are freed, m (0 = keep all)
 
@@ -104,6 +117,19 @@ struct TsdfConfig {
     v.param("mesh_min_label_frames", mesh_min_label_frames, "frames",
             "a vertex shows the Bayesian argmax only when its odds against the runner-up reach r^this, "
             "r = c*m/(1-c) the odds one label-only frame adds (c, m: bayes_default_confidence, bayes_confusion_classes)", {0, 16});
+    v.param("label_prior_normals", label_prior_normals, "",
+            "mesh labels: a floor vertex must face up, a ceiling down, a wall be vertical (else unlabelled)");
+    v.param("label_prior_heights", label_prior_heights, "",
+            "mesh labels: floor within label_prior_floor_band_m of the estimated floor, ceiling above label_prior_min_ceiling_height_m");
+    v.param("label_prior_regions", label_prior_regions, "",
+            "mesh labels: a planar gravity-aligned region's fitting majority class fills its unlabelled and contradicting vertices");
+    v.param("label_prior_max_tilt_deg", label_prior_max_tilt_deg, "deg", "normal tolerance of the floor/ceiling/wall rules", {1.0, 60.0});
+    v.param("label_prior_floor_band_m", label_prior_floor_band_m, "m", "floor labels lie within this of the floor height", positive(10.0));
+    v.param("label_prior_min_ceiling_height_m", label_prior_min_ceiling_height_m, "m", "ceiling labels lie at least this above the floor", non_negative(100.0));
+    v.param("label_prior_region_normal_deg", label_prior_region_normal_deg, "deg", "region growing: normal within this of the region's mean", {1.0, 45.0});
+    v.param("label_prior_region_plane_m", label_prior_region_plane_m, "m", "region growing: centroid within this of the region's plane", positive(1.0));
+    v.param("label_prior_region_min_area_m2", label_prior_region_min_area_m2, "m^2", "regions smaller than this decide nothing", non_negative(1e6));
+    v.param("label_prior_region_min_share", label_prior_region_min_share, "", "a region's class holds at least this share of its labelled area", {0.0, 1.0});
     v.param("drop_distance", drop_distance, "m", "free blocks farther than this from the camera (0 = never)", non_negative(1e6));
   }
   void validate() const {

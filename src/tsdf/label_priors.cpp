@@ -1,0 +1,222 @@
+#include "tsdf/label_priors.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+namespace semap {
+
+namespace {
+
+enum class Facing : uint8_t { kOther, kUp, kDown, kVertical };
+
+struct Geometry {
+  std::vector<Eigen::Vector3d> vertex_normal;    ///< area-weighted, unit (zero if isolated)
+  std::vector<Eigen::Vector3d> triangle_normal;  ///< mean of its vertices' normals, unit
+  std::vector<Eigen::Vector3d> centroid;
+  std::vector<double> area_m2;
+  std::vector<uint32_t> first, incident;         ///< vertex -> triangles (CSR)
+};
+
+Geometry mesh_geometry(const TriangleMesh& mesh) {
+  Geometry g;
+  const size_t nv = mesh.vertices.points.size(), nt = mesh.triangles.size();
+  g.vertex_normal.assign(nv, Eigen::Vector3d::Zero());
+  g.triangle_normal.resize(nt);
+  g.centroid.resize(nt);
+  g.area_m2.resize(nt);
+  g.first.assign(nv + 1, 0);
+  for (size_t t = 0; t < nt; ++t) {
+    const TriangleGeometry tg = triangle_geometry(mesh, t);
+    g.centroid[t] = tg.centroid;
+    g.area_m2[t] = tg.area_m2;
+    for (uint32_t v : mesh.triangles[t]) {
+      g.vertex_normal[v] += tg.area_m2 * tg.normal;  // area-weighted
+      ++g.first[v + 1];
+    }
+  }
+  for (auto& n : g.vertex_normal)
+    if (n.norm() > 0) n.normalize();
+  for (size_t v = 0; v < nv; ++v) g.first[v + 1] += g.first[v];
+  g.incident.resize(g.first[nv]);
+  std::vector<uint32_t> fill(g.first.begin(), g.first.end() - 1);
+  for (size_t t = 0; t < nt; ++t) {
+    Eigen::Vector3d n = Eigen::Vector3d::Zero();
+    for (uint32_t v : mesh.triangles[t]) {
+      g.incident[fill[v]++] = static_cast<uint32_t>(t);
+      n += g.vertex_normal[v];
+    }
+    g.triangle_normal[t] = n.norm() > 0 ? n.normalized() : n;
+  }
+  return g;
+}
+
+Facing facing(const Eigen::Vector3d& n, const Eigen::Vector3d& up, double cos_tilt, double sin_tilt) {
+  const double c = n.dot(up);
+  if (c >= cos_tilt) return Facing::kUp;
+  if (c <= -cos_tilt) return Facing::kDown;
+  if (std::fabs(c) <= sin_tilt && n.squaredNorm() > 0) return Facing::kVertical;
+  return Facing::kOther;
+}
+
+/// The class rules of the file comment: does `label` fit a surface facing `f` at `height_m`
+/// above the floor (NaN: no floor known)?
+struct ClassRules {
+  bool normals, heights;
+  double floor_band_m, min_ceiling_m;
+  bool fits(ClassId label, Facing f, double height_m) const {
+    const bool floor_known = heights && std::isfinite(height_m);
+    if (label == id(Label::kFloor))
+      return (!normals || f == Facing::kUp) && (!floor_known || std::fabs(height_m) <= floor_band_m);
+    if (label == id(Label::kCeiling))
+      return (!normals || f == Facing::kDown) && (!floor_known || height_m >= min_ceiling_m);
+    if (label == id(Label::kWall)) return !normals || f == Facing::kVertical;
+    return true;
+  }
+};
+
+bool is_structural(ClassId c) { return c == id(Label::kWall) || c == id(Label::kFloor) || c == id(Label::kCeiling); }
+/// Classes that may lie in a wall, floor or ceiling plane: surface coverings and openings.
+bool may_lie_in_plane(ClassId c) { return c == 0 || is_stuff(c) || c == id(Label::kPicture); }
+
+struct Region {
+  Facing facing = Facing::kOther;
+  double area_m2 = 0.0;
+  Eigen::Vector3d normal_sum = Eigen::Vector3d::Zero(), point_sum = Eigen::Vector3d::Zero();
+  std::vector<uint32_t> triangles;
+};
+
+/// Grows the planar gravity-aligned regions (file comment) over triangles sharing a vertex.
+std::vector<Region> grow_regions(const TriangleMesh& mesh, const Geometry& g, const std::vector<Facing>& tri_facing,
+                                 const TsdfConfig& c) {
+  const double cos_region = std::cos(c.label_prior_region_normal_deg * std::numbers::pi / 180.0);
+  std::vector<int32_t> region_of(mesh.triangles.size(), -1);
+  std::vector<Region> regions;
+  std::vector<uint32_t> queue;
+  for (size_t seed = 0; seed < mesh.triangles.size(); ++seed) {
+    if (region_of[seed] >= 0 || tri_facing[seed] == Facing::kOther || g.area_m2[seed] <= 0) continue;
+    Region r;
+    r.facing = tri_facing[seed];
+    const auto add = [&](uint32_t t) {
+      region_of[t] = static_cast<int32_t>(regions.size());
+      r.triangles.push_back(t);
+      r.area_m2 += g.area_m2[t];
+      r.normal_sum += g.area_m2[t] * g.triangle_normal[t];
+      r.point_sum += g.area_m2[t] * g.centroid[t];
+    };
+    add(static_cast<uint32_t>(seed));
+    queue.assign(1, static_cast<uint32_t>(seed));
+    while (!queue.empty()) {
+      const uint32_t t = queue.back();
+      queue.pop_back();
+      const Eigen::Vector3d n = r.normal_sum.normalized(), p = r.point_sum / r.area_m2;
+      for (uint32_t v : mesh.triangles[t])
+        for (uint32_t k = g.first[v]; k < g.first[v + 1]; ++k) {
+          const uint32_t u = g.incident[k];
+          if (region_of[u] >= 0 || tri_facing[u] != r.facing || g.area_m2[u] <= 0) continue;
+          if (g.triangle_normal[u].dot(n) < cos_region) continue;
+          if (std::fabs(n.dot(g.centroid[u] - p)) > c.label_prior_region_plane_m) continue;
+          add(u);
+          queue.push_back(u);
+        }
+    }
+    if (r.area_m2 >= c.label_prior_region_min_area_m2) regions.push_back(std::move(r));
+    else
+      for (uint32_t t : r.triangles) region_of[t] = -2;  // too small: never a seed or member again
+  }
+  return regions;
+}
+
+/// The class that decides a region: a horizontal region facing up at the floor height is floor
+/// (rug where more of it is labelled rug), one facing down at ceiling height is ceiling: the
+/// lowest and highest large horizontal surfaces. Any other region: the fitting class with the
+/// most area, when it holds region_min_share of the fitting labelled area; else 0.
+ClassId region_class(const TriangleMesh& mesh, const Geometry& g, const Region& r, const ClassRules& rules,
+                     const GravityEstimate& gravity, const TsdfConfig& c) {
+  std::vector<double> area(kNumClasses, 0.0);
+  for (uint32_t t : r.triangles) {
+    const ClassId l = triangle_label(mesh, t);
+    if (l != 0 && l < kNumClasses) area[l] += g.area_m2[t];
+  }
+  const double height = gravity.floor_found ? gravity.up_W.dot(r.point_sum / r.area_m2) - gravity.floor_height_m
+                                            : std::nan("");
+  if (c.label_prior_heights && gravity.floor_found) {
+    if (r.facing == Facing::kUp && std::fabs(height) <= c.label_prior_floor_band_m)
+      return area[id(Label::kRug)] > area[id(Label::kFloor)] ? id(Label::kRug) : id(Label::kFloor);
+    if (r.facing == Facing::kDown && height >= c.label_prior_min_ceiling_height_m) return id(Label::kCeiling);
+  }
+  ClassId best = 0;
+  double fitting = 0.0;
+  for (int l = 1; l < kNumClasses; ++l) {
+    if (!rules.fits(ClassId(l), r.facing, height)) continue;
+    fitting += area[l];
+    if (area[l] > area[best]) best = ClassId(l);
+  }
+  return best != 0 && area[best] >= c.label_prior_region_min_share * fitting ? best : 0;
+}
+
+}  // namespace
+
+LabelPriorStats apply_label_priors(TriangleMesh& mesh, const GravityEstimate& gravity, const TsdfConfig& c) {
+  LabelPriorStats stats;
+  auto& labels = mesh.vertices.labels;
+  if (labels.size() != mesh.vertices.points.size() || mesh.triangles.empty()) return stats;
+  if (!c.label_prior_normals && !c.label_prior_heights && !c.label_prior_regions) return stats;
+  const ClassRules rules{c.label_prior_normals, c.label_prior_heights, c.label_prior_floor_band_m,
+                         c.label_prior_min_ceiling_height_m};
+  const double tilt = c.label_prior_max_tilt_deg * std::numbers::pi / 180.0;
+  const double cos_tilt = std::cos(tilt), sin_tilt = std::sin(tilt);
+  const Eigen::Vector3d up = gravity.up_W.normalized();
+  const Geometry g = mesh_geometry(mesh);
+  const auto height_of = [&](const Eigen::Vector3d& p) {
+    return gravity.floor_found ? up.dot(p) - gravity.floor_height_m : std::nan("");
+  };
+
+  // The class rules, per vertex (its smoothed normal, its height).
+  std::vector<uint8_t> contradicts(labels.size(), 0);
+  for (size_t v = 0; v < labels.size(); ++v) {
+    if (labels[v] == 0) continue;
+    const Facing f = facing(g.vertex_normal[v], up, cos_tilt, sin_tilt);
+    if (!rules.fits(labels[v], f, height_of(mesh.vertices.points[v].cast<double>()))) {
+      contradicts[v] = 1;
+      ++stats.contradicting;
+    }
+  }
+  // The regions decide, from the labels before the class rules removed any.
+  if (c.label_prior_regions) {
+    std::vector<Facing> tri_facing(mesh.triangles.size());
+    for (size_t t = 0; t < tri_facing.size(); ++t) tri_facing[t] = facing(g.triangle_normal[t], up, cos_tilt, sin_tilt);
+    const std::vector<Region> regions = grow_regions(mesh, g, tri_facing, c);
+    std::vector<ClassId> decided(regions.size());
+    for (size_t i = 0; i < regions.size(); ++i) decided[i] = region_class(mesh, g, regions[i], rules, gravity, c);
+    std::vector<uint8_t> done(labels.size(), 0);
+    for (size_t i = 0; i < regions.size(); ++i) {
+      const ClassId cls = decided[i];
+      if (cls == 0) continue;
+      ++stats.regions;
+      stats.region_area_m2 += regions[i].area_m2;
+      for (uint32_t t : regions[i].triangles)
+        for (uint32_t v : mesh.triangles[t]) {
+          if (done[v]) continue;
+          done[v] = 1;
+          const ClassId old = labels[v];
+          if (old == cls) continue;
+          if (old == 0 || contradicts[v]) {
+            ++stats.filled;
+          } else if (is_structural(cls) && !may_lie_in_plane(old)) {
+            ++stats.replaced;
+          } else {
+            continue;
+          }
+          labels[v] = cls;
+          contradicts[v] = 0;
+        }
+    }
+  }
+  for (size_t v = 0; v < labels.size(); ++v)
+    if (contradicts[v]) labels[v] = 0;
+  return stats;
+}
+
+}  // namespace semap

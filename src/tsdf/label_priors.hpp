@@ -1,0 +1,45 @@
+#pragma once
+// Geometry-aware label decision (issue 38): the classes' physical places, applied to the mesh's
+// vertex labels after the fused evidence is decided (VoxelLabelRule), so that a label that
+// contradicts the surface it lands on loses to the evidence that fits. Up and the floor height
+// come from core/gravity (the cameras' mean up refined by horizontal surfaces); the normal rule
+// needs only up, so it works when no floor is visible; the height rules need the floor.
+//
+// Rules (each switched by its tsdf.label_prior_* parameter, all on by default):
+//  - normals: floor must face up, ceiling down (within max_tilt_deg of the vertical axis, as
+//    wound: semap's meshes face free space), wall must be vertical (normal within max_tilt_deg
+//    of horizontal). A vertex whose smoothed normal contradicts its label is unlabelled.
+//  - heights (floor found): floor lies within floor_band_m of the floor height, a ceiling at
+//    least min_ceiling_height_m above it; others contradict.
+//  - regions: the mesh is grown into planar, gravity-aligned regions (facing up, facing down or
+//    vertical; each triangle's smoothed normal within region_normal_deg of the region's mean
+//    normal and its centroid within region_plane_m of the region's plane). In a region of at
+//    least region_min_area_m2 whose labelled area holds a class that fits the region's geometry
+//    (as above) with at least region_min_share of the labelled area, that class fills the
+//    region's unlabelled and contradicting vertices, and, when it is wall, floor or ceiling,
+//    the vertices of classes that cannot lie in such a plane (objects and furniture: all but
+//    the stuff classes and picture). An unlabelled region facing up at floor height is floor;
+//    one facing down at ceiling height is ceiling (the lowest and highest large horizontal
+//    surfaces).
+#include <cstddef>
+
+#include "semap/core/gravity.hpp"
+#include "semap/core/point_cloud.hpp"
+#include "semap/tsdf/tsdf_config.hpp"
+
+namespace semap {
+
+/// What the rules changed (vertex counts).
+struct LabelPriorStats {
+  size_t contradicting = 0;  ///< labels the normal or height rules rejected
+  size_t filled = 0;         ///< vertices given their region's class (from unlabelled or contradicting)
+  size_t replaced = 0;       ///< object labels in a wall/floor/ceiling plane given its class
+  size_t regions = 0;        ///< regions that decided a class
+  double region_area_m2 = 0.0;  ///< their area
+};
+
+/// Applies the rules of the file comment that `config` switches on to mesh.vertices.labels.
+/// A mesh without labels is left alone. Thread safety: touches only `mesh`.
+LabelPriorStats apply_label_priors(TriangleMesh& mesh, const GravityEstimate& gravity, const TsdfConfig& config);
+
+}  // namespace semap

@@ -1,0 +1,165 @@
+// The geometry-aware label rules (tsdf/label_priors.hpp, issue 38) on a simulated room whose
+// true classes are known: floor, two walls, a ceiling, a table top at 0.75 m and a cup on the
+// table. The fused labels are corrupted the way a single-view network corrupts them: tiles of
+// the table top called floor, tiles of the floor called table, cup labels on the wall, wall
+// labels on the floor's edge tiles, and much left unlabelled. Each rule is measured on and off
+// against the truth (share of the mesh area with the true class), and the floor thickness and
+// normal agreement of eval/consistency_metrics.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "semap/eval/consistency_metrics.hpp"
+#include "tsdf/label_priors.hpp"
+
+namespace semap {
+namespace {
+
+constexpr double kTile_m = 0.25;  // labels are corrupted in tiles of this size (network blobs)
+
+struct World {
+  TriangleMesh mesh;
+  std::vector<ClassId> truth;  // per vertex
+};
+
+/// A grid of `nu` x `nv` cells of 5 cm spanning origin + [0, u] x [0, v]; normal u x v. Each
+/// tile's observed label: the true one with p_true, `wrong` with p_wrong, else unlabelled.
+void add_plane(World& w, const Eigen::Vector3f& origin, const Eigen::Vector3f& u, const Eigen::Vector3f& v,
+               ClassId truth, ClassId wrong, double p_true, double p_wrong, std::mt19937& rng) {
+  const int nu = static_cast<int>(std::lround(u.norm() / 0.05)), nv = static_cast<int>(std::lround(v.norm() / 0.05));
+  const uint32_t base = static_cast<uint32_t>(w.mesh.vertices.points.size());
+  const int tiles_u = static_cast<int>(std::ceil(u.norm() / kTile_m)) + 1;
+  std::vector<ClassId> tile_label(static_cast<size_t>(tiles_u) * (static_cast<int>(v.norm() / kTile_m) + 2));
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  for (auto& l : tile_label) {
+    const double r = uni(rng);
+    l = r < p_true ? truth : r < p_true + p_wrong ? wrong : ClassId(0);
+  }
+  for (int j = 0; j <= nv; ++j)
+    for (int i = 0; i <= nu; ++i) {
+      const float a = float(i) / nu, b = float(j) / nv;
+      w.mesh.vertices.points.push_back(origin + a * u + b * v);
+      const int tu = static_cast<int>(a * u.norm() / kTile_m), tv = static_cast<int>(b * v.norm() / kTile_m);
+      w.mesh.vertices.labels.push_back(tile_label[static_cast<size_t>(tv) * tiles_u + tu]);
+      w.truth.push_back(truth);
+    }
+  const auto at = [&](int i, int j) { return base + static_cast<uint32_t>(j * (nu + 1) + i); };
+  for (int j = 0; j < nv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      w.mesh.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+      w.mesh.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
+}
+
+/// The room; `with_floor` false: only the table, walls and ceiling are seen (no floor visible).
+World room(bool with_floor, uint32_t seed = 7) {
+  World w;
+  std::mt19937 rng(seed);
+  const ClassId floor = id(Label::kFloor), wall = id(Label::kWall), table = id(Label::kTable), cup = id(Label::kCup);
+  using V = Eigen::Vector3f;
+  if (with_floor) add_plane(w, V(0, 0, 0), V(4, 0, 0), V(0, 4, 0), floor, table, 0.55, 0.15, rng);  // faces up
+  add_plane(w, V(0, 0, 0.3f), V(0, 0, 2.2f), V(4, 0, 0), wall, cup, 0.5, 0.15, rng);      // y = 0, faces +y
+  add_plane(w, V(0, 0, 0.3f), V(0, 4, 0), V(0, 0, 2.2f), wall, floor, 0.5, 0.15, rng);    // x = 0, faces +x
+  add_plane(w, V(0, 0, 2.6f), V(0, 4, 0), V(4, 0, 0), id(Label::kCeiling), wall, 0.3, 0.1, rng);  // faces down
+  add_plane(w, V(1.5f, 1.5f, 0.75f), V(1.2f, 0, 0), V(0, 0.8f, 0), table, floor, 0.3, 0.5, rng);  // top, faces up
+  // A cup (10 cm tall, vertical sides) on the table, labelled cup with wall blobs.
+  for (int k = 0; k < 4; ++k) {
+    const float a = float(k) * 1.5708f;
+    const V o(2.0f + 0.05f * std::cos(a), 1.9f + 0.05f * std::sin(a), 0.75f);
+    add_plane(w, o, V(0, 0, 0.1f), V(-0.07f * std::sin(a), 0.07f * std::cos(a), 0), cup, wall, 0.6, 0.2, rng);
+  }
+  return w;
+}
+
+GravityEstimate gravity(bool floor_found) {
+  GravityEstimate g;
+  g.up_W = Eigen::Vector3d::UnitZ();
+  g.floor_found = floor_found;
+  g.floor_height_m = 0.0;
+  return g;
+}
+
+double vertex_accuracy(const World& w) {
+  size_t ok = 0;
+  for (size_t v = 0; v < w.truth.size(); ++v) ok += w.mesh.vertices.labels[v] == w.truth[v];
+  return double(ok) / w.truth.size();
+}
+
+TsdfConfig rules(bool normals, bool heights, bool regions) {
+  TsdfConfig c;
+  c.label_prior_normals = normals;
+  c.label_prior_heights = heights;
+  c.label_prior_regions = regions;
+  return c;
+}
+
+struct Measured {
+  double accuracy;
+  SemanticConsistency consistency;
+};
+Measured run(bool with_floor, const TsdfConfig& c) {
+  World w = room(with_floor);
+  apply_label_priors(w.mesh, gravity(with_floor), c);
+  return {vertex_accuracy(w), evaluate_consistency(w.mesh, {})};
+}
+
+TEST(LabelPriors, NormalRuleRemovesLabelsThatContradictTheSurface) {
+  const Measured off = run(true, rules(false, false, false)), on = run(true, rules(true, false, false));
+  // Wall labels on the (horizontal) ceiling, floor labels on the (vertical) wall go.
+  EXPECT_LT(off.consistency.wall.agreement, 0.85);
+  EXPECT_GT(on.consistency.wall.agreement, 0.97);
+  EXPECT_GT(on.consistency.floor.facing_agreement, 0.97);
+  EXPECT_LT(on.consistency.labelled_area_share, off.consistency.labelled_area_share);  // it only removes
+}
+
+TEST(LabelPriors, HeightRuleKeepsTheFloorOneSurface) {
+  const Measured off = run(true, rules(true, false, false)), on = run(true, rules(true, true, false));
+  ASSERT_TRUE(off.consistency.floor_thickness_m && on.consistency.floor_thickness_m);
+  EXPECT_GT(*off.consistency.floor_thickness_m, 0.5);  // the table top called floor
+  EXPECT_LT(*on.consistency.floor_thickness_m, 0.05);
+}
+
+TEST(LabelPriors, RegionsFillSurfacesWithTheirFittingClass) {
+  const Measured classes = run(true, rules(true, true, false)), all = run(true, rules(true, true, true));
+  const Measured none = run(true, rules(false, false, false));
+  EXPECT_LT(none.accuracy, 0.6);
+  EXPECT_GT(all.accuracy, 0.93);
+  EXPECT_GT(all.accuracy, classes.accuracy + 0.2);
+  EXPECT_GT(all.consistency.labelled_area_share, 0.97);
+  EXPECT_GT(all.consistency.floor.facing_agreement, 0.97);
+  EXPECT_GT(all.consistency.wall.agreement, 0.97);
+  EXPECT_GT(all.consistency.ceiling.facing_agreement, 0.97);
+  ASSERT_TRUE(all.consistency.floor_thickness_m);
+  EXPECT_LT(*all.consistency.floor_thickness_m, 0.05);
+}
+
+TEST(LabelPriors, TheTableTopCalledFloorBecomesTable) {
+  World w = room(true);
+  apply_label_priors(w.mesh, gravity(true), rules(true, true, true));
+  size_t top = 0, table = 0;
+  for (size_t v = 0; v < w.truth.size(); ++v)
+    if (w.truth[v] == id(Label::kTable)) {
+      ++top;
+      table += w.mesh.vertices.labels[v] == id(Label::kTable);
+    }
+  EXPECT_GT(double(table) / top, 0.95);
+}
+
+TEST(LabelPriors, WorkWithoutAVisibleFloor) {
+  // Up is known (the cameras), the floor height is not: the normal and region rules still hold.
+  const Measured none = run(false, rules(false, false, false)), all = run(false, rules(true, true, true));
+  EXPECT_GT(all.accuracy, none.accuracy + 0.25);
+  EXPECT_GT(all.consistency.wall.agreement, 0.97);
+  EXPECT_GT(all.consistency.labelled_area_share, 0.9);
+}
+
+TEST(LabelPriors, AllRulesOffChangeNothing) {
+  World w = room(true);
+  const std::vector<ClassId> before = w.mesh.vertices.labels;
+  const LabelPriorStats s = apply_label_priors(w.mesh, gravity(true), rules(false, false, false));
+  EXPECT_EQ(w.mesh.vertices.labels, before);
+  EXPECT_EQ(s.filled + s.replaced + s.contradicting, 0u);
+}
+
+}  // namespace
+}  // namespace semap
