@@ -24,6 +24,7 @@ void add_segment_command(CLI::App& app, CommandRunner& run);
 void add_view_command(CLI::App& app, CommandRunner& run);
 void add_config_command(CLI::App& app, CommandRunner& run);
 void add_merge_command(CLI::App& app, CommandRunner& run);
+void add_query_command(CLI::App& app, CommandRunner& run);  // issue 39
 
 /// An option whose value is one of an enum's names (a typo is a parse error listing them).
 template <class E, size_t N>

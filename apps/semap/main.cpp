@@ -41,6 +41,7 @@ int main(int argc, char** argv) {
   semap::app::add_synth_command(app, run);
   semap::app::add_run_command(app, run);
   semap::app::add_merge_command(app, run);
+  semap::app::add_query_command(app, run);
   semap::app::add_demo_command(app, run);
   semap::app::add_eval_command(app, run);
   semap::app::add_segment_command(app, run);

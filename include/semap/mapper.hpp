@@ -155,6 +155,9 @@ class Mapper {
   /// label layers, the object map, the keyframe database and pose graph (tracked runs), the
   /// camera and the configuration. load() continues it.
   void save(const std::filesystem::path& path) const;
+  /// The same with sections of other stages added (issue 39: "gravity"); a name the Mapper
+  /// writes itself is not replaced.
+  void save(const std::filesystem::path& path, const std::map<std::string, std::string>& extra_sections) const;
 
   /// Continues the map saved in `path` by save() (issue 19): TSDF, objects and keyframes come
   /// from the file, in its world frame. The first frames are relocalised against the saved

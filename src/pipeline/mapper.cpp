@@ -693,6 +693,11 @@ SemanticTsdf Mapper::Impl::refresh_start() const {
 }
 
 void Mapper::save(const std::filesystem::path& path) const { write_map_archive(path, impl_->sections()); }
+void Mapper::save(const std::filesystem::path& path, const std::map<std::string, std::string>& extra_sections) const {
+  ArchiveSections sections = impl_->sections();
+  sections.insert(extra_sections.begin(), extra_sections.end());
+  write_map_archive(path, sections);
+}
 
 std::unique_ptr<Mapper> Mapper::load(const std::filesystem::path& path, std::optional<SemapConfig> config,
                                      std::unique_ptr<Segmenter> segmenter) {

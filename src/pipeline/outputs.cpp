@@ -8,7 +8,9 @@
 namespace semap {
 
 MapOutputs collect_outputs(const Mapper& mapper) {
-  return {mapper.trajectory(), mapper.mesh(), mapper.objects()};
+  MapOutputs outputs{mapper.trajectory(), mapper.mesh(), mapper.objects(), {}};
+  outputs.navigation = build_navigation_maps(mapper, outputs.mesh, outputs.trajectory, outputs.objects);
+  return outputs;
 }
 
 void write_objects(const std::vector<ObjectSummary>& objects, const std::filesystem::path& dir) {
@@ -31,7 +33,8 @@ void write_map_outputs(const Mapper& mapper, const MapOutputs& outputs, const st
   write_tum_trajectory(dir / "trajectory.txt", outputs.trajectory);
   write_ply(dir / "mesh.ply", outputs.mesh);
   write_objects(outputs.objects, dir);
-  mapper.save(dir / "map.semap");
+  write_navigation_maps(outputs.navigation, dir);
+  mapper.save(dir / "map.semap", {{kGravitySection, encode_gravity_section(outputs.navigation.gravity)}});
 }
 
 void write_map_outputs(const Mapper& mapper, const std::filesystem::path& dir) {

@@ -183,6 +183,8 @@ void write_run_report(const std::filesystem::path& dir, const RunResult& result,
   });
   nlohmann::json report = to_json(result);
   report["consistency"] = to_json(evaluate_consistency(outputs.mesh, outputs.trajectory));  // issue 38
+  report["gravity"] = gravity_report_json(outputs.navigation.gravity);  // issue 39
+  report["navigation"] = navigation_report_json(outputs.navigation);
   write_file_atomic(dir / "report.json", report.dump(2) + "\n");
   write_report_html(dir, report);
 }

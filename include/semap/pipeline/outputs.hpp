@@ -5,12 +5,15 @@
 //   trajectory.txt     TUM format, every frame, T_world_camera
 //   mesh.ply           binary PLY, vertex x y z red green blue label instance
 //   objects.json       + objects/<id>.ply (schema in SHARED_FORMATS.md)
-//   map.semap          the TSDF map (versioned, checksummed)
+//   map.semap          the TSDF map (versioned, checksummed), with the gravity section
+//   map.pgm, map.yaml, map_labels.png, esdf.npy, esdf.yaml, scene_graph.json  (issue 39,
+//                      pipeline/navigation_outputs.hpp)
 #include <filesystem>
 #include <vector>
 
 #include "semap/objects/object_summary.hpp"
 #include "semap/mapper.hpp"
+#include "semap/pipeline/navigation_outputs.hpp"
 
 namespace semap {
 
@@ -19,10 +22,12 @@ struct MapOutputs {
   Trajectory trajectory;
   TriangleMesh mesh;
   std::vector<ObjectSummary> objects;
+  NavigationMaps navigation;  ///< gravity frame, occupancy grid, scene graph (issue 39)
 };
 MapOutputs collect_outputs(const Mapper& mapper);
 
-/// Writes trajectory.txt, mesh.ply, objects.json + objects/*.ply and map.semap into `dir`
+/// Writes trajectory.txt, mesh.ply, objects.json + objects/*.ply, the navigation maps and
+/// scene graph, and map.semap into `dir`
 /// (created when missing). Throws semap::Error naming the file that cannot be written.
 void write_map_outputs(const Mapper& mapper, const MapOutputs& outputs, const std::filesystem::path& dir);
 void write_map_outputs(const Mapper& mapper, const std::filesystem::path& dir);

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "semap/core/params.hpp"
+#include "semap/navigation/navigation_config.hpp"
 #include "semap/objects/objects_config.hpp"
 #include "semap/segmentation/segmentation_config.hpp"
 #include "semap/synth/segmentation_noise.hpp"
@@ -36,6 +37,7 @@ struct SemapConfig {
   ObjectsConfig objects;
   /// The built-in noisy segmenter (`--seg-noise`, `semap demo`); flicker_rate is set by the CLI.
   SegmentationNoiseParams simulated_segmentation;
+  NavigationConfig navigation;  ///< issue 39: occupancy grid, distance field, scene graph
 
   void visit(ParamVisitor& v) {
     v.section("pipeline", "threads and queues", [&](ParamVisitor& s) { pipeline.visit(s); });
@@ -45,6 +47,8 @@ struct SemapConfig {
     v.section("objects", "object map (METHODS C2-C5)", [&](ParamVisitor& s) { objects.visit(s); });
     v.section("simulated_segmentation", "built-in noisy segmenter on ground-truth labels (--seg-noise, demo)",
               [&](ParamVisitor& s) { simulated_segmentation.visit(s); });
+    v.section("navigation", "occupancy grid, distance field and scene graph (issue 39)",
+              [&](ParamVisitor& s) { navigation.visit(s); });
   }
   void validate() const {
     pipeline.validate();
@@ -53,6 +57,7 @@ struct SemapConfig {
     tsdf.validate();
     objects.validate();
     simulated_segmentation.validate();
+    navigation.validate();
   }
 };
 

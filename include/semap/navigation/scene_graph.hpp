@@ -1,0 +1,119 @@
+#pragma once
+// Scene graph of a map (issue 39): objects, structural surfaces and places with their
+// relations, what planners and language models read. Written as scene_graph.json; schema in
+// README.md ("scene_graph.json"). Frame: the gravity frame G (core/gravity.hpp: z up, z = 0 on
+// the floor plane) unless a key says _W (world); metres, radians.
+//
+// Relations, each with its evidence:
+//   on(A, B)       A's bottom (lowest point) lies within on_tolerance_m of B's top (B an object,
+//                  or the floor at z = 0) and at least half of A's footprint cells overlap B's
+//                  box footprint (the floor: always). Of several candidates, the highest top
+//                  below or at A's bottom + tolerance wins: one support per object; an object
+//                  resting on nothing (wall-mounted, floating) has no `on`.
+//   in(A, B)       A's centroid lies inside B's box and A's box volume is under half of B's.
+//   near(A, B)     centroids at most near_distance_m apart (A < B by id, listed once).
+//   in_place(A, P) the free cell nearest A's footprint centre belongs to place P.
+#include <Eigen/Core>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "semap/core/pose.hpp"
+#include "semap/navigation/navigation_config.hpp"
+#include "semap/navigation/occupancy_grid.hpp"
+#include "semap/objects/object_summary.hpp"
+
+namespace semap {
+
+/// Box with a vertical axis: centre, full sizes along its own x, y and z, yaw about z (rad).
+struct GravityBox {
+  Eigen::Vector3d center_G = Eigen::Vector3d::Zero();
+  Eigen::Vector3d size_m = Eigen::Vector3d::Zero();
+  double yaw_rad = 0.0;
+  /// Whether the (x, y) of a gravity-frame point lies inside the footprint grown by `margin_m`.
+  bool footprint_contains(const Eigen::Vector2d& xy_G, double margin_m = 0.0) const;
+  bool contains(const Eigen::Vector3d& p_G) const;
+  double bottom_m() const { return center_G.z() - 0.5 * size_m.z(); }
+  double top_m() const { return center_G.z() + 0.5 * size_m.z(); }
+};
+/// Vertical box around gravity-frame points: yaw from the footprint's principal axes, x-y extent
+/// of every point, z from the k-th lowest point (k = max(5, n / 500)) to the 98th percentile.
+GravityBox gravity_box(const std::vector<Eigen::Vector3d>& points_G);
+
+struct SceneObjectNode {
+  uint32_t id = 0;  ///< the object's id in objects.json
+  std::string class_name;
+  double confidence = 0.0;
+  Eigen::Vector3d centroid_G = Eigen::Vector3d::Zero();
+  GravityBox box;
+  size_t point_count = 0;
+  std::vector<Eigen::Vector2d> footprint_G;  ///< centres of the grid cells its points cover (not serialised)
+};
+
+enum class SurfaceKind : uint8_t { kFloor, kWall, kCeiling };
+inline constexpr EnumNames<SurfaceKind, 3> kSurfaceKindNames{
+    {{SurfaceKind::kFloor, "floor"}, {SurfaceKind::kWall, "wall"}, {SurfaceKind::kCeiling, "ceiling"}}};
+
+struct SurfaceNode {
+  std::string id;  ///< "floor", "wall_<k>", "ceiling"
+  SurfaceKind kind = SurfaceKind::kFloor;
+  double height_m = 0.0;  ///< horizontal surfaces: height in G
+  double area_m2 = 0.0;   ///< observed area (floor: the free cells of the grid)
+};
+
+struct PlaceNode {
+  std::string id;  ///< "place_<k>"
+  double area_m2 = 0.0;
+  Eigen::Vector2d centroid_G = Eigen::Vector2d::Zero();
+  size_t cells = 0;
+};
+
+enum class Relation : uint8_t { kOn, kIn, kNear, kInPlace };
+inline constexpr EnumNames<Relation, 4> kRelationNames{
+    {{Relation::kOn, "on"}, {Relation::kIn, "in"}, {Relation::kNear, "near"}, {Relation::kInPlace, "in_place"}}};
+
+struct SceneEdge {
+  Relation relation = Relation::kOn;
+  std::string source, target;  ///< node ids: "object_<id>", "floor", "place_<k>"
+  nlohmann::json evidence;      ///< measured figures behind the relation (metres, fractions)
+};
+
+struct SceneGraph {
+  Pose T_W_G = Pose::Identity();
+  std::vector<SceneObjectNode> objects;
+  std::vector<SurfaceNode> surfaces;
+  std::vector<PlaceNode> places;
+  std::vector<SceneEdge> edges;
+  NavigationConfig config;  ///< the thresholds the relations used
+};
+
+std::string object_node_id(uint32_t id);
+
+/// Builds nodes and edges (see the file comment). `grid` gives the floor's area, the places and
+/// the footprints; an empty grid gives none of them (objects and their mutual relations stay).
+SceneGraph build_scene_graph(const std::vector<ObjectSummary>& objects, const OccupancyGrid& grid,
+                             const NavigationConfig& config);
+
+nlohmann::json to_json(const SceneGraph& graph);
+/// Reads a scene_graph.json document; throws semap::Error(source, what is wrong).
+SceneGraph scene_graph_from_json(const nlohmann::json& j, const std::string& source);
+/// Reads OUT/scene_graph.json (or the file itself).
+SceneGraph load_scene_graph(const std::filesystem::path& folder_or_file);
+
+}  // namespace semap
+
+namespace semap {
+
+/// A question to a scene graph (`semap query`): objects of `class_name` (any when empty) that
+/// are on / in an object of class `on` / `in` (or "floor", or a node id), and near an object of
+/// class `near` (centroid distance at most within_m; the graph's near_distance_m when unset).
+struct SceneQuery {
+  std::string class_name, on, in, near;
+  double within_m = -1.0;
+};
+/// One JSON object per matching object node: the node (as in scene_graph.json) plus "matches",
+/// the relations that satisfied the query with their evidence. In node order.
+std::vector<nlohmann::json> query_scene_graph(const SceneGraph& graph, const SceneQuery& query);
+
+}  // namespace semap
