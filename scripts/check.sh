@@ -12,7 +12,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/lib/ccache-env.sh
 JOBS=${SEMAP_JOBS:-$(nproc)}
-ALL_FOLDERS=(core io synth eval tsdf tracking segmentation objects pipeline apps reliability python)
+ALL_FOLDERS=(core io synth eval tsdf tracking segmentation objects navigation pipeline apps reliability python)
 
 changed_files() {  # $1: a revision, or empty
   if [ -n "${1:-}" ]; then git diff --name-only "$1" --; git ls-files --others --exclude-standard; return; fi
