@@ -4,11 +4,13 @@
 //   bench_tracking [DATASET_DIR] [--frames N] [--no-open3d] [--no-repair-compare]
 //                  [--no-loop-compare] [--deterministic] [--out-trajectory FILE] [--threads N]
 //                  [--set "key: value"]... (tracking parameters, YAML, as in the tracking: section)
-//   bench_tracking --k-table [--steps 1,3,5,10] [--deterministic] [--no-open3d: no baselines] [--set ...]
+//   bench_tracking --k-table [--steps 1,3,5,10|none] [--no-keyframe-rate] [--deterministic] [--no-open3d: no baselines] [--set ...]
 //     issue 16: every k-th frame of tum_fr1_rpy and 7scenes_redkitchen (TUM-layout slices of
 //     links in a temp dir, tests/sequence_slices), ATE / RPE / lost / ms per frame of ours,
 //     Open3D's and OpenCV's (cv::rgbd::RgbdICPOdometry) odometry on the same frames: a text
-//     table on stderr, JSON on stdout.
+//     table on stderr, JSON on stdout. Issue 42: plus a keyframe-rate row per sequence (k "kf":
+//     frames at least 25 cm or 20 deg apart by the ground truth, tests/sequence_slices
+//     frames_by_motion, as a robot recording at 1-2 Hz gives); --no-keyframe-rate leaves it out.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -151,7 +153,7 @@ std::string cell(const json& j, const char* lost_key) {
 }
 
 /// Issue 16: the k-table (every k-th frame of both shared sequences, ours beside the baselines).
-int run_k_table(const std::vector<size_t>& steps, const TrackingConfig& config, bool baselines) {
+int run_k_table(const std::vector<size_t>& steps, const TrackingConfig& config, bool baselines, bool keyframe_rate) {
   namespace fs = std::filesystem;
   const fs::path tmp = fs::temp_directory_path() / ("semap_bench_slices_" + std::to_string(::getpid()));
   json report = json::array();
@@ -163,15 +165,25 @@ int run_k_table(const std::vector<size_t>& steps, const TrackingConfig& config, 
       std::fprintf(stderr, "%s: missing, skipped\n", source.c_str());
       continue;
     }
+    std::vector<std::pair<std::string, test::SliceSpec>> slices;
     for (size_t k : steps) {
       test::SliceSpec spec;
       spec.step = k;
-      const test::SequenceSlice slice = test::write_sequence_slice(source, spec, tmp / (name + std::to_string(k)));
+      slices.emplace_back(std::to_string(k), spec);
+    }
+    if (keyframe_rate) {
+      test::SliceSpec spec;
+      spec.frames = test::frames_by_motion(source, 0.25, 20.0);
+      slices.emplace_back("kf", spec);
+    }
+    for (const auto& [k, spec] : slices) {
+      const test::SequenceSlice slice = test::write_sequence_slice(source, spec, tmp / (name + k));
       auto reader = open_dataset(slice.dir);
       std::vector<Frame> frames;
       for (size_t i = 0; i < reader->size(); ++i) frames.push_back(reader->load(i));
       const Trajectory gt = reader->ground_truth();
       json row = {{"sequence", name}, {"k", k}, {"frames", frames.size()}};
+      if (k == "kf") row["source_frames"] = slice.source_index;
       row["ours"] = run_ours(frames, reader->camera(), config, gt, nullptr);
       std::string o3 = "n/a", ocv = "n/a";
 #ifdef SEMAP_HAVE_OPEN3D
@@ -186,10 +198,10 @@ int run_k_table(const std::vector<size_t>& steps, const TrackingConfig& config, 
         ocv = cell(row["opencv_rgbd_icp"], "failures");
       }
 #endif
-      std::fprintf(stderr, "%-20s %3zu %6zu | %s | %s | %s\n", name.c_str(), k, frames.size(),
+      std::fprintf(stderr, "%-20s %3s %6zu | %s | %s | %s\n", name.c_str(), k.c_str(), frames.size(),
                    cell(row["ours"], "lost_frames").c_str(), o3.c_str(), ocv.c_str());
       report.push_back(row);
-      fs::remove_all(tmp / (name + std::to_string(k)));
+      fs::remove_all(tmp / (name + k));
     }
   }
   std::error_code ec;
@@ -204,6 +216,7 @@ int main(int argc, char** argv) {
     std::string dataset = std::string(SEMAP_SHARED_DIR) + "/data/tum_fr1_rpy";
     size_t max_frames = 0;
     bool open3d = true, repair_compare = true, loop_compare = true, deterministic = false, k_table = false;
+    bool keyframe_rate = true;
     std::vector<size_t> steps = {1, 3, 5, 10};
     std::string out_trajectory;
     std::vector<std::string> overrides;
@@ -215,7 +228,8 @@ int main(int argc, char** argv) {
       else if (a == "--no-loop-compare") loop_compare = false;
       else if (a == "--deterministic") deterministic = true;
       else if (a == "--k-table") k_table = true;
-      else if (a == "--steps" && i + 1 < argc) steps = parse_steps(argv[++i]);
+      else if (a == "--steps" && i + 1 < argc) steps = std::string(argv[i + 1]) == "none" ? (++i, std::vector<size_t>{}) : parse_steps(argv[++i]);
+      else if (a == "--no-keyframe-rate") keyframe_rate = false;
       else if (a == "--verbose") verbose = true;
       else if (a == "--threads" && i + 1 < argc) cv::setNumThreads(std::stoi(argv[++i]));  // OpenCV/TBB workers
       else if (a == "--out-trajectory" && i + 1 < argc) out_trajectory = argv[++i];
@@ -228,7 +242,7 @@ int main(int argc, char** argv) {
       config.background_loop_closure = !deterministic;
       for (const auto& o : overrides) load_config_string(o, "--set", [&](ParamVisitor& v) { config.visit(v); });
       config.validate();
-      return run_k_table(steps, config, open3d);
+      return run_k_table(steps, config, open3d, keyframe_rate);
     }
     auto reader = open_dataset(dataset);
     const size_t n = max_frames ? std::min(max_frames, reader->size()) : reader->size();
@@ -253,7 +267,7 @@ int main(int argc, char** argv) {
     if (!out_trajectory.empty()) write_tum_trajectory(out_trajectory, traj);
     if (repair_compare) {
       TrackingConfig no_repair = config;
-      no_repair.depth_repair = false;
+      no_repair.depth_repair.enabled = false;
       report["ours_without_depth_repair"] = run_ours(frames, reader->camera(), no_repair, gt, nullptr);
     }
     if (loop_compare) {

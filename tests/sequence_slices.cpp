@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iomanip>
@@ -21,6 +22,12 @@ namespace {
 /// The output frames' source indices (first..last every step, optionally reversed).
 std::vector<size_t> kept_frames(const SliceSpec& spec, size_t source_frames) {
   std::vector<size_t> kept;
+  if (!spec.frames.empty()) {
+    for (const size_t i : spec.frames)
+      if (i < source_frames) kept.push_back(i);
+    if (spec.reverse) std::reverse(kept.begin(), kept.end());
+    return kept;
+  }
   const size_t last = std::min(spec.last, source_frames == 0 ? 0 : source_frames - 1);
   for (size_t i = spec.first; i <= last && i < source_frames; i += std::max<size_t>(1, spec.step)) kept.push_back(i);
   if (spec.reverse) std::reverse(kept.begin(), kept.end());
@@ -99,8 +106,29 @@ SequenceSlice write_sequence_slice(const fs::path& source_dir, const SliceSpec& 
   return slice;
 }
 
+std::vector<size_t> frames_by_motion(const fs::path& source_dir, double min_translation_m, double min_rotation_deg) {
+  const auto reader = open_dataset(source_dir);
+  const std::vector<FrameRecord>& records = reader->records();
+  std::vector<size_t> kept;
+  for (size_t i = 0; i < records.size(); ++i) {
+    if (!records[i].gt_T_world_camera) throw Error(source_dir, "frame " + std::to_string(i) + " has no ground truth");
+    if (!kept.empty()) {
+      const Pose step = records[kept.back()].gt_T_world_camera->inverse() * *records[i].gt_T_world_camera;
+      if (step.translation().norm() < min_translation_m && rotation_angle(step) * 180.0 / M_PI < min_rotation_deg)
+        continue;
+    }
+    kept.push_back(i);
+  }
+  return kept;
+}
+
 std::string describe(const SliceSpec& spec) {
   std::ostringstream s;
+  if (!spec.frames.empty()) {
+    s << spec.frames.size() << " chosen frames " << spec.frames.front() << ".." << spec.frames.back();
+    if (spec.reverse) s << " reversed";
+    return s.str();
+  }
   s << "k=" << spec.step << " frames " << spec.first << "..";
   if (spec.last == std::numeric_limits<size_t>::max()) s << "end";
   else s << spec.last;

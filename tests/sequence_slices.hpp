@@ -21,6 +21,9 @@ struct SliceSpec {
   /// Output frames [blank_begin, blank_end) are replaced by all-zero depth and black RGB (a
   /// dropped / covered sensor); the ground truth keeps their true poses.
   size_t blank_begin = 0, blank_end = 0;
+  /// Explicit source frames (increasing reader indices), e.g. frames_by_motion(): used instead
+  /// of first / last / step when not empty.
+  std::vector<size_t> frames;
 };
 
 struct SequenceSlice {
@@ -36,6 +39,13 @@ struct SequenceSlice {
 /// source when it has no ground truth or the slice is empty.
 SequenceSlice write_sequence_slice(const std::filesystem::path& source_dir, const SliceSpec& spec,
                                    const std::filesystem::path& out_dir);
+
+/// Keyframe-rate frames (issue 42): the first frame, then each frame whose ground-truth pose is
+/// at least `min_translation_m` or `min_rotation_deg` from the last one kept, as a robot that
+/// records at 1-2 Hz would give. The ground truth only chooses the frames. Throws semap::Error
+/// naming the source when a frame has no ground truth.
+std::vector<size_t> frames_by_motion(const std::filesystem::path& source_dir, double min_translation_m,
+                                     double min_rotation_deg);
 
 /// "k=5 frames 0..499" style label for logs.
 std::string describe(const SliceSpec& spec);

@@ -68,10 +68,10 @@ void require_same_ferns(const TrackingConfig& saved, const TrackingConfig& given
       throw Error(path, std::string("tracking.") + key + " is " + std::to_string(b) + " here but " + std::to_string(a) +
                             " in the saved map: its keyframes cannot be recognised (use the map's value)");
   };
-  check("fern_count", saved.fern_count, given.fern_count);
-  check("fern_tests", saved.fern_tests, given.fern_tests);
-  check("fern_width", saved.fern_width, given.fern_width);
-  check("fern_height", saved.fern_height, given.fern_height);
+  check("fern_count", saved.ferns.fern_count, given.ferns.fern_count);
+  check("fern_tests", saved.ferns.fern_tests, given.ferns.fern_tests);
+  check("fern_width", saved.ferns.width, given.ferns.width);
+  check("fern_height", saved.ferns.height, given.ferns.height);
   check("seed", double(saved.seed), double(given.seed));
   check("min_depth", saved.min_depth, given.min_depth);
   check("max_depth", saved.max_depth, given.max_depth);

@@ -73,7 +73,7 @@ FrameStatus status_of(const TrackResult& r) {
 }
 
 DepthRepairParams repair_params(const TrackingConfig& c) {
-  return {c.depth_repair_radius, c.depth_repair_gray_threshold, c.depth_repair_min_support};
+  return c.depth_repair;
 }
 
 /// METHODS A1 guides the repair by the colour image at depth resolution; a separate colour
@@ -219,7 +219,7 @@ TrackedFrame Mapper::Impl::locate(const Frame& frame, const std::optional<Pose>&
   if (given) {
     if (!is_valid_pose(*given, 1e-4)) throw Error("frame " + std::to_string(frame.index), "pose is not a rigid transform");
     item.T_world_camera = *given;
-    if (config.tracking.depth_repair) item.frame.depth = repaired(frame.depth, frame.rgb, config.tracking);
+    if (config.tracking.depth_repair.enabled) item.frame.depth = repaired(frame.depth, frame.rgb, config.tracking);
     timings.add("depth_repair", t0);
     return item;
   }
@@ -418,7 +418,7 @@ std::optional<IntegrationInput> Mapper::Impl::refresh_input(size_t sequence, con
       undistortion.apply(frame);
       if (repair_archive.has(sequence)) {
         repair_archive.apply(sequence, frame.depth);
-      } else if (config.tracking.depth_repair) {
+      } else if (config.tracking.depth_repair.enabled) {
         frame.depth = repaired(frame.depth, frame.rgb, config.tracking);
       }
     } else {

@@ -2,13 +2,9 @@
 // Joint median filter depth repair (METHODS.md A1).
 #include <opencv2/core.hpp>
 
-namespace semap {
+#include "semap/tracking/tracking_config.hpp"  // DepthRepairParams
 
-struct DepthRepairParams {
-  int radius = 3;                ///< window radius r, pixels
-  double gray_threshold = 12.0;  ///< t_gray, grey levels
-  int min_support = 1;           ///< fewer same-grey valid neighbours -> stays invalid
-};
+namespace semap {
 
 /// Fills every invalid (0 / non-finite) pixel of `depth` (CV_32FC1, metres) with the median of
 /// the valid depths in its (2r+1)^2 window whose grey value (from `rgb`, CV_8UC3 BGR or CV_8UC1,

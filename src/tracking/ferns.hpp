@@ -4,15 +4,9 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
-namespace semap {
+#include "semap/tracking/tracking_config.hpp"  // FernParams
 
-struct FernParams {
-  int fern_count = 500;   ///< m
-  int fern_tests = 4;     ///< n binary tests per fern
-  int width = 80, height = 60;
-  double min_depth = 0.2, max_depth = 4.5;  ///< range of the random depth thresholds, metres
-  uint32_t seed = 1;
-};
+namespace semap {
 
 /// The m fern codes of one image.
 using FernCode = std::vector<uint16_t>;

@@ -10,7 +10,7 @@
 
 #include "semap/core/camera.hpp"
 #include "semap/core/pose.hpp"
-#include "semap/tracking/tracking_config.hpp"  // IcpParams
+#include "semap/tracking/tracking_config.hpp"  // IcpParams, RansacParams
 
 namespace semap {
 
@@ -21,12 +21,6 @@ using Vector6d = Eigen::Matrix<double, 6, 1>;
 /// Needs >= 3 non-collinear pairs; returns identity (and ok=false) otherwise.
 Pose fit_rigid(const std::vector<Eigen::Vector3d>& src, const std::vector<Eigen::Vector3d>& dst, bool* ok = nullptr);
 
-struct RansacParams {
-  int iterations = 200;
-  double inlier_distance = 0.04;  ///< metres
-  int min_inliers = 15;
-  uint32_t seed = 1;
-};
 struct RansacResult {
   bool ok = false;                 ///< >= min_inliers after the refit
   Pose T = Pose::Identity();       ///< dst ~ T * src

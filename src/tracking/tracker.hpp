@@ -1,7 +1,11 @@
 #pragma once
-// Camera tracking (METHODS.md A1-A4): depth repair, frame-to-keyframe odometry (ORB + voting
-// RANSAC + point-to-plane ICP), random-ferns keyframe database for relocalisation and loop
-// closure, and a keyframe pose graph (Ceres).
+// Camera tracking (METHODS.md A1-A4): depth repair, then three parts (issue 42), each with its
+// own lock and its thread safety stated per method:
+//   Odometry (odometry.hpp)               frame-to-keyframe registration, ORB + voting RANSAC +
+//                                         point-to-plane ICP, returning an OdometryResult;
+//   KeyframeDatabase (keyframe_database.hpp)  keyframes, random ferns, relocalisation, map-merge matching;
+//   LoopCloser (loop_closer.hpp)          the keyframe pose graph (Ceres) and the loop-closure worker.
+// Tracker::track runs the per-frame steps over them and keeps the reference and motion prior.
 //
 // Poses: T_world_camera, world = first frame's camera. Every frame is stored relative to its
 // reference keyframe, so corrections of keyframe poses (pose graph) move the frames with them.
@@ -73,6 +77,9 @@ struct KeyframeMatch {
   double overlap = 0.0, rmse_m = 0.0;      ///< ICP overlap fraction and residual
 };
 
+/// Thread safety: track(), resume() and finish() are called by one thread (the tracking
+/// thread); trajectory(), keyframes(), stats(), state(), match_keyframe() and config() may be
+/// called from any thread at the same time (each part guards its own data).
 class Tracker {
  public:
   /// Validates the config (throws semap::Error). Colour must be registered to depth (an image of

@@ -398,6 +398,6 @@ TEST(Tracker, TracksRenderedRoomSequence) {
 TEST(TrackingConfig, ValidateRejectsBadValues) {
   TrackingConfig c;
   EXPECT_NO_THROW(c.validate());
-  c.depth_repair_radius = 0;
+  c.depth_repair.radius = 0;
   EXPECT_THROW(c.validate(), Error);
 }

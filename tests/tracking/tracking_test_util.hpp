@@ -13,6 +13,7 @@ struct TrackingRun {
   double ate_rmse = 0, rpe_trans = 0, rpe_rot = 0;
   double ate_before_final = 0;
   size_t frames = 0, lost = 0;
+  double ms_per_frame = 0;  ///< mean Tracker::track wall time (printed, never asserted: bench/ measures speed)
   TrackerStats stats;
 };
 
@@ -27,6 +28,7 @@ inline TrackingRun run_tracker_on(const std::filesystem::path& dir, size_t max_f
     if (frame.gt_T_world_camera) gt.push_back({frame.timestamp, *frame.gt_T_world_camera});
     const TrackResult r = tracker.track(frame);
     run.lost += r.status == TrackingStatus::lost;
+    run.ms_per_frame += r.timings.total_ms / double(n);
   }
   if (gt.size() < 3) gt = reader->ground_truth();
   run.ate_before_final = compute_ate(gt, tracker.trajectory()).rmse;
@@ -42,7 +44,7 @@ inline TrackingRun run_tracker_on(const std::filesystem::path& dir, size_t max_f
             << " cm (before final pass " << run.ate_before_final * 100 << " cm) RPE=" << run.rpe_trans * 100
             << " cm/s " << run.rpe_rot << " deg/s keyframes=" << run.stats.keyframes
             << " reuses=" << run.stats.keyframe_reuses << " loops=" << run.stats.loop_edges << " local=" << run.stats.local_edges
-            << " lost=" << run.lost << std::endl;
+            << " lost=" << run.lost << " ms/frame=" << run.ms_per_frame << std::endl;
   return run;
 }
 

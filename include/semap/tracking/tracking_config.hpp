@@ -1,5 +1,6 @@
 #pragma once
 #include <algorithm>
+#include <cstdint>
 
 #include "semap/core/params.hpp"
 
@@ -52,14 +53,80 @@ struct IcpParams {
   }
 };
 
-/// Parameters of tracking (METHODS.md A1-A4). Every tunable of src/tracking lives here (the
-/// ICP in its section `icp`); ranges are declared once in visit(), validate() derives from them.
+/// Joint median filter depth repair (METHODS.md A1): the keys `tracking.depth_repair*`.
+/// One default set (issue 42): radius 2 and min_support 3, the values `semap run` has used
+/// (the Mapper and the tracker repair with the tracking config); the filter's own former
+/// defaults (3, 1) were used by no caller.
+struct DepthRepairParams {
+  int radius = 2;                ///< window radius r, pixels
+  double gray_threshold = 12.0;  ///< t_gray, grey levels (0..255)
+  int min_support = 3;           ///< fewer same-grey valid neighbours -> pixel stays invalid
+  bool enabled = true;           ///< fill invalid depth pixels (valid ones never change)
+
+  /// Flat keys under `tracking` (user-facing, and stored in saved maps' configs).
+  void visit(ParamVisitor& v) {
+    v.param("depth_repair", enabled, "", "fill invalid depth with the joint median filter (A1)");
+    v.param("depth_repair_radius", radius, "px", "joint median window radius r (A1)", {1, 15});
+    v.param("depth_repair_gray_threshold", gray_threshold, "grey levels", "t_gray: neighbours whose grey differs more are ignored (A1)", non_negative(255.0));
+    v.param("depth_repair_min_support", min_support, "px", "minimum same-grey valid neighbours to fill a pixel", {1, 961});
+  }
+};
+
+/// Voting RANSAC over 3D-3D feature matches (METHODS.md A2 step 3) and how far its estimate is
+/// trusted: the keys `tracking.ransac_*`. registration.hpp's ransac_rigid() reads iterations,
+/// inlier_distance, min_inliers and seed.
+struct RansacParams {
+  int iterations = 200;            ///< 3-point samples per RANSAC
+  double inlier_distance = 0.04;   ///< vote threshold on 3D point distance, metres
+  int min_inliers = 15;            ///< fewer inliers -> feature estimate not used
+  /// A feature estimate this well supported is trusted even where it disagrees with the
+  /// constant-velocity prior (wide baselines, sudden motion, issue 16): inlier count ...
+  int trusted_inliers = 40;
+  double trusted_ratio = 0.3;      ///< ... and inliers / matches
+  double icp_agreement = 0.05;     ///< ICP refined within this of the RANSAC estimate (metres; radians / 0.5 m lever) to keep its support
+  int wide_iterations = 1000;      ///< RANSAC samples of the wide-baseline attempt (only when the prior failed)
+  /// Random seed of one RANSAC run: not a key, the tracker derives it from tracking.seed and
+  /// the frame / keyframe (deterministic).
+  uint32_t seed = 1;
+
+  void visit(ParamVisitor& v) {
+    v.param("ransac_iterations", iterations, "", "voting RANSAC samples (A2)", {1, 1000000});
+    v.param("ransac_inlier_distance", inlier_distance, "m", "3D distance under which a match votes", positive(1.0));
+    v.param("ransac_min_inliers", min_inliers, "", "fewer inliers: the feature estimate is not used", {3, 100000});
+    v.param("ransac_trusted_inliers", trusted_inliers, "", "this many inliers (and the ratio) make the feature estimate trusted against the motion prior", {3, 100000});
+    v.param("ransac_trusted_ratio", trusted_ratio, "", "inliers / matches a trusted feature estimate needs", fraction());
+    v.param("ransac_icp_agreement", icp_agreement, "m", "ICP must stay this close to the RANSAC estimate to keep its support (rotation: rad x 0.5 m)", positive(1.0));
+    v.param("wide_ransac_iterations", wide_iterations, "", "RANSAC samples when the motion prior failed", {1, 1000000});
+  }
+};
+
+/// Random ferns encoding of keyframes (METHODS.md A3): the keys `tracking.fern_*`. A saved
+/// map's keyframes are only recognised with the same values (map_archive checks them).
+struct FernParams {
+  int fern_count = 500;  ///< m ferns
+  int fern_tests = 4;    ///< n binary tests per fern
+  int width = 80;        ///< downsampled encoding width, pixels
+  int height = 60;       ///< downsampled encoding height, pixels
+  /// Range of the random depth thresholds (metres) and the test seed: not keys, the tracker
+  /// sets them from tracking.min_depth / max_depth / seed.
+  double min_depth = 0.2, max_depth = 4.5;
+  uint32_t seed = 1;
+
+  void visit(ParamVisitor& v) {
+    v.param("fern_count", fern_count, "", "m random ferns (A3)", {1, 10000});
+    v.param("fern_tests", fern_tests, "", "n binary tests per fern (code has 2^n values)", {1, 12});
+    v.param("fern_width", width, "px", "encoding image width", {8, 4096});
+    v.param("fern_height", height, "px", "encoding image height", {8, 4096});
+  }
+};
+
+/// Parameters of tracking (METHODS.md A1-A4). Every tunable of src/tracking lives here, in
+/// sections (depth repair, RANSAC, ICP, ferns); ranges are declared once in visit(),
+/// validate() derives from them. The YAML keys of depth_repair, ransac and ferns stay flat
+/// under `tracking` (saved maps store their config); the ICP has its own section `icp`.
 struct TrackingConfig {
   // --- A1 depth repair (joint median filter) ---
-  bool depth_repair = true;            ///< fill invalid depth pixels (valid ones never change)
-  int depth_repair_radius = 2;         ///< window radius r, pixels
-  double depth_repair_gray_threshold = 12.0;  ///< t_gray, grey levels (0..255)
-  int depth_repair_min_support = 3;    ///< fewer same-grey valid neighbours -> pixel stays invalid
+  DepthRepairParams depth_repair;
 
   // --- depth range used by tracking ---
   double min_depth = 0.2;              ///< metres
@@ -72,15 +139,7 @@ struct TrackingConfig {
   int orb_fast_threshold = 15;         ///< FAST corner threshold, grey levels
   double match_ratio = 0.8;            ///< Lowe ratio test (best / second best Hamming distance)
   int match_max_hamming = 64;          ///< matches with a larger Hamming distance are dropped, bits
-  int ransac_iterations = 200;         ///< 3-point samples per RANSAC
-  double ransac_inlier_distance = 0.04;  ///< vote threshold on 3D point distance, metres
-  int ransac_min_inliers = 15;         ///< fewer inliers -> feature estimate not used
-  /// A feature estimate this well supported is trusted even where it disagrees with the
-  /// constant-velocity prior (wide baselines, sudden motion, issue 16): inlier count ...
-  int ransac_trusted_inliers = 40;
-  double ransac_trusted_ratio = 0.3;   ///< ... and inliers / matches
-  double ransac_icp_agreement = 0.05;  ///< ICP refined within this of the RANSAC estimate (metres; radians / 0.5 m lever) to keep its support
-  int wide_ransac_iterations = 1000;   ///< RANSAC samples of the wide-baseline attempt (only when the prior failed)
+  RansacParams ransac;
   int seed = 1;                        ///< RANSAC / ferns random seed (deterministic)
 
   // --- A2 ICP ---
@@ -115,10 +174,7 @@ struct TrackingConfig {
   double keyframe_reuse_max_score = 0.8;  ///< max (dt/keyframe_translation + drot/keyframe_rotation) for reuse
 
   // --- A3 random ferns ---
-  int fern_count = 500;                ///< m ferns
-  int fern_tests = 4;                  ///< n binary tests per fern
-  int fern_width = 80;                 ///< downsampled encoding width, pixels
-  int fern_height = 60;                ///< downsampled encoding height, pixels
+  FernParams ferns;
   double fern_new_keyframe_similarity = 0.0;  ///< max similarity below this -> new keyframe (fraction of ferns)
   double loop_min_similarity = 0.45;   ///< loop candidate needs at least this similarity (fraction); revisits of real Kinect views score 0.45-0.55 (exposure, viewpoint), geometric verification rejects false candidates
   int loop_min_keyframe_gap = 8;       ///< candidates must be this many keyframes older
@@ -139,10 +195,7 @@ struct TrackingConfig {
   bool parallel = false;               ///< row-parallel loops (cv::parallel_for_) inside tracking; off: serial, less CPU per frame when the pipeline shares the cores (OpenCV's own calls are unaffected)
 
   void visit(ParamVisitor& v) {
-    v.param("depth_repair", depth_repair, "", "fill invalid depth with the joint median filter (A1)");
-    v.param("depth_repair_radius", depth_repair_radius, "px", "joint median window radius r (A1)", {1, 15});
-    v.param("depth_repair_gray_threshold", depth_repair_gray_threshold, "grey levels", "t_gray: neighbours whose grey differs more are ignored (A1)", non_negative(255.0));
-    v.param("depth_repair_min_support", depth_repair_min_support, "px", "minimum same-grey valid neighbours to fill a pixel", {1, 961});
+    depth_repair.visit(v);
     v.param("min_depth", min_depth, "m", "nearer depth is ignored by tracking", non_negative(100.0));
     v.param("max_depth", max_depth, "m", "farther depth is ignored by tracking", positive(100.0));
     v.param("orb_features", orb_features, "", "ORB keypoints per frame (A2)", {10, 100000});
@@ -151,13 +204,7 @@ struct TrackingConfig {
     v.param("orb_fast_threshold", orb_fast_threshold, "grey levels", "FAST corner threshold", {1, 255});
     v.param("match_ratio", match_ratio, "", "ratio test on Hamming distances (best/second)", {0.0, 1.0, true});
     v.param("match_max_hamming", match_max_hamming, "bits", "matches farther than this are dropped", {0, 256});
-    v.param("ransac_iterations", ransac_iterations, "", "voting RANSAC samples (A2)", {1, 1000000});
-    v.param("ransac_inlier_distance", ransac_inlier_distance, "m", "3D distance under which a match votes", positive(1.0));
-    v.param("ransac_min_inliers", ransac_min_inliers, "", "fewer inliers: the feature estimate is not used", {3, 100000});
-    v.param("ransac_trusted_inliers", ransac_trusted_inliers, "", "this many inliers (and the ratio) make the feature estimate trusted against the motion prior", {3, 100000});
-    v.param("ransac_trusted_ratio", ransac_trusted_ratio, "", "inliers / matches a trusted feature estimate needs", fraction());
-    v.param("ransac_icp_agreement", ransac_icp_agreement, "m", "ICP must stay this close to the RANSAC estimate to keep its support (rotation: rad x 0.5 m)", positive(1.0));
-    v.param("wide_ransac_iterations", wide_ransac_iterations, "", "RANSAC samples when the motion prior failed", {1, 1000000});
+    ransac.visit(v);
     v.param("seed", seed, "", "random seed for RANSAC and ferns");
     v.section("icp", "point-to-plane + photometric ICP, coarse to fine (A2 step 4)", [&](ParamVisitor& s) { icp.visit(s); });
     v.param("wide_icp_gate_factor", wide_icp_gate_factor, "", "wide-baseline ICP gate = this x the start pose's expected error", positive(20.0));
@@ -179,10 +226,7 @@ struct TrackingConfig {
     v.param("keyframe_min_inliers", keyframe_min_inliers, "", "fewer RANSAC inliers make a new keyframe", {0, 100000});
     v.param("keyframe_reuse", keyframe_reuse, "", "re-use an older keyframe near the current pose");
     v.param("keyframe_reuse_max_score", keyframe_reuse_max_score, "", "pose-distance score limit for re-use", non_negative(100.0));
-    v.param("fern_count", fern_count, "", "m random ferns (A3)", {1, 10000});
-    v.param("fern_tests", fern_tests, "", "n binary tests per fern (code has 2^n values)", {1, 12});
-    v.param("fern_width", fern_width, "px", "encoding image width", {8, 4096});
-    v.param("fern_height", fern_height, "px", "encoding image height", {8, 4096});
+    ferns.visit(v);
     v.param("fern_new_keyframe_similarity", fern_new_keyframe_similarity, "", "dissimilar frames become keyframes", fraction());
     v.param("loop_min_similarity", loop_min_similarity, "", "fern similarity of a loop candidate", fraction());
     v.param("loop_min_keyframe_gap", loop_min_keyframe_gap, "keyframes", "loop candidates are at least this old", {1, 1000000});
@@ -203,7 +247,7 @@ struct TrackingConfig {
   void validate() const {
     check_param_ranges(*this, "tracking");
     require_param(max_depth > min_depth, "tracking.max_depth", "need min_depth < max_depth");
-    require_param(ransac_trusted_inliers >= ransac_min_inliers, "tracking.ransac_trusted_inliers", "must be >= ransac_min_inliers");
+    require_param(ransac.trusted_inliers >= ransac.min_inliers, "tracking.ransac_trusted_inliers", "must be >= ransac_min_inliers");
   }
 };
 

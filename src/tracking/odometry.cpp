@@ -1,0 +1,125 @@
+#include "tracking/odometry.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "tracking/pose_graph.hpp"  // information_from_icp
+
+namespace semap {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+double deg(double rad) { return rad * 180.0 / M_PI; }
+}  // namespace
+
+double pose_distance(const Pose& a, const Pose& b) {
+  const Pose d = a.inverse() * b;
+  return d.translation().norm() + 0.5 * rotation_angle(d);
+}
+
+double keyframe_spacings(const Pose& relative, const TrackingConfig& c) {
+  return relative.translation().norm() / c.keyframe_translation + deg(rotation_angle(relative)) / c.keyframe_rotation_deg;
+}
+
+Odometry::Odometry(const TrackingConfig& config, const PinholeIntrinsics& intrinsics)
+    : cfg_(config), intr_(intrinsics) {
+  orb_ = cv::ORB::create(cfg_.orb_features, float(cfg_.orb_scale_factor), cfg_.orb_levels, 19, 0, 2,
+                         cv::ORB::HARRIS_SCORE, 31, cfg_.orb_fast_threshold);
+  icp_params_ = cfg_.icp;
+  // Wide-baseline ICP (issue 16): twice the coarse iterations, the basin is at the coarse levels.
+  wide_icp_params_ = cfg_.icp;
+  wide_icp_params_.iterations_coarse = 2 * cfg_.icp.iterations_coarse;
+  wide_icp_params_.iterations_mid = 2 * cfg_.icp.iterations_mid;
+}
+
+FrameFeatures Odometry::extract_features(const cv::Mat& gray, const cv::Mat& depth) {
+  return semap::extract_features(*orb_, gray, depth, intr_, cfg_.min_depth, cfg_.max_depth);
+}
+
+std::vector<DepthLevel> Odometry::pyramid(const cv::Mat& depth, const cv::Mat& gray, bool source_only) const {
+  return build_depth_pyramid(depth, intr_, cfg_.icp.levels, cfg_.min_depth, cfg_.max_depth, true,
+                             cfg_.icp.photometric_weight > 0 ? gray : cv::Mat(), source_only);
+}
+
+IcpResult Odometry::refine(const std::vector<DepthLevel>& source, const std::vector<DepthLevel>& target,
+                           const Pose& T_target_source) const {
+  return icp_point_to_plane(source, target, T_target_source, icp_params_);
+}
+
+bool Odometry::icp_acceptable(const IcpResult& icp, double max_rmse, double min_overlap) const {
+  return icp.converged && icp.rmse <= max_rmse && icp.overlap >= min_overlap;
+}
+
+bool Odometry::plausible(const Pose& prior, const Pose& T_ref_frame) const {
+  const Pose jump = prior.inverse() * T_ref_frame;
+  return jump.translation().norm() <= cfg_.loss_max_translation_jump &&
+         deg(rotation_angle(jump)) <= cfg_.loss_max_rotation_jump_deg;
+}
+
+Matrix6d Odometry::information(const IcpResult& icp) const {
+  return information_from_icp(icp.hessian, icp.T_target_source, icp.matched,
+                              std::max(icp.rmse, cfg_.information_min_sigma), cfg_.information_effective_points);
+}
+
+/// Judges an ICP result from the registration's own evidence (issue 16): converged with
+/// acceptable residual and overlap; trusted when a well-supported RANSAC estimate agrees
+/// with it, else it must be plausible against the prior (without a prior: not accepted).
+void Odometry::judge(OdometryResult& reg, const RansacResult& ransac, bool trusted, const Pose* prior) const {
+  reg.T_kf_frame = reg.icp.T_target_source;
+  reg.ok = icp_acceptable(reg.icp, cfg_.loss_max_icp_rmse, cfg_.loss_min_overlap);
+  reg.feature_supported = trusted && pose_distance(ransac.T, reg.T_kf_frame) <= cfg_.ransac.icp_agreement;
+  reg.accepted = reg.ok && (reg.feature_supported || (prior && plausible(*prior, reg.T_kf_frame)));
+}
+
+/// The wide-baseline ICP gate: grows with how far the start may be off (the prior's own step).
+IcpParams Odometry::wide_params(double expected_error_m) const {
+  IcpParams p = wide_icp_params_;
+  p.max_distance = std::clamp(cfg_.wide_icp_gate_factor * expected_error_m, cfg_.icp.max_distance,
+                              std::max(cfg_.icp.max_distance, cfg_.wide_icp_max_distance));
+  return p;
+}
+
+OdometryResult Odometry::register_to(const FrameFeatures& frame_features, const std::vector<DepthLevel>& frame_pyramid,
+                                     const FrameFeatures& kf_features, const std::vector<DepthLevel>& kf_pyramid,
+                                     const Pose* prior, uint32_t seed, RegistrationEffort effort,
+                                     double prior_step_m) const {
+  const bool wide = effort == RegistrationEffort::wide;
+  OdometryResult reg;
+  auto t0 = Clock::now();
+  const auto pairs = match_features(frame_features, kf_features, cfg_.match_ratio, cfg_.match_max_hamming);
+  reg.matches = int(pairs.size());
+  std::vector<Eigen::Vector3d> src, dst;
+  for (const auto& [q, t] : pairs) {
+    src.push_back(frame_features.points[q]);
+    dst.push_back(kf_features.points[t]);
+  }
+  RansacParams rp = cfg_.ransac;
+  if (wide) rp.iterations = cfg_.ransac.wide_iterations;
+  rp.seed = seed;
+  const RansacResult ransac = ransac_rigid(src, dst, rp);
+  reg.inliers = ransac.ok ? int(ransac.inliers.size()) : 0;
+  const bool trusted = ransac.ok && reg.inliers >= cfg_.ransac.trusted_inliers &&
+                       reg.inliers >= cfg_.ransac.trusted_ratio * reg.matches;
+  reg.ransac_ms = ms_since(t0);
+  t0 = Clock::now();
+  const IcpParams& params = wide ? wide_icp_params_ : icp_params_;
+  if (ransac.ok) {
+    reg.icp = icp_point_to_plane(frame_pyramid, kf_pyramid, ransac.T, params);
+    judge(reg, ransac, trusted, prior);
+  }
+  // RANSAC on a few bad matches can mislead ICP; the prior is the second chance.
+  if (!reg.accepted && prior) {
+    OdometryResult second = reg;
+    second.icp = icp_point_to_plane(frame_pyramid, kf_pyramid, *prior, wide ? wide_params(prior_step_m) : icp_params_);
+    judge(second, ransac, trusted, prior);
+    second.used_prior = true;
+    if (second.accepted || !ransac.ok) reg = second;
+  }
+  if (reg.icp.matched > 0) reg.information = information(reg.icp);
+  reg.icp_ms = ms_since(t0);
+  return reg;
+}
+
+}  // namespace semap
