@@ -29,6 +29,7 @@ from ._semap import (  # noqa: F401  (the public API)
     default_config,
     evaluate_ate,
     evaluate_rpe,
+    load_scene_graph,
     merge_maps,
     open_dataset,
     run,
@@ -36,7 +37,7 @@ from ._semap import (  # noqa: F401  (the public API)
 
 __all__ = [
     "Camera", "Dataset", "DatasetFrame", "Error", "FrameResult", "Mapper", "Mesh", "Object",
-    "class_colors", "class_names", "default_config", "evaluate_ate", "evaluate_rpe", "merge_maps",
+    "class_colors", "class_names", "default_config", "evaluate_ate", "evaluate_rpe", "load_scene_graph", "merge_maps",
     "open_dataset", "run", "to_open3d",
 ]
 

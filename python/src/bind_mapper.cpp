@@ -14,6 +14,8 @@
 #include "frame_input.hpp"
 #include "numpy_mat.hpp"
 #include "semap/io/config_loader.hpp"
+#include "semap/navigation/distance_query.hpp"
+#include "semap/pipeline/navigation_outputs.hpp"
 #include "semap/pipeline/outputs.hpp"
 
 namespace semap::python {
@@ -84,6 +86,28 @@ class PyMapper {
     py::gil_scoped_release nogil;
     std::lock_guard lock(driver_mutex_);
     write_map_outputs(*mapper_, dir);
+  }
+
+  // Issue 39: the scene graph (scene_graph.json as a dict) and 3D distance queries.
+  py::object scene_graph() const {
+    nlohmann::json graph;
+    {
+      py::gil_scoped_release nogil;
+      graph = to_json(build_navigation_maps(*mapper_).scene_graph);
+    }
+    return json_to_python(graph);
+  }
+  double distance_m(const std::array<double, 3>& p) const {
+    py::gil_scoped_release nogil;
+    double d = 0;
+    mapper_->read_tsdf([&](const TsdfMap& map) { d = DistanceQuery(map).distance_m({p[0], p[1], p[2]}); });
+    return d;
+  }
+  bool is_free(const std::array<double, 3>& p, double radius_m) const {
+    py::gil_scoped_release nogil;
+    bool free = false;
+    mapper_->read_tsdf([&](const TsdfMap& map) { free = DistanceQuery(map).is_free({p[0], p[1], p[2]}, radius_m); });
+    return free;
   }
 
   py::list trajectory() const {
@@ -181,7 +205,12 @@ void bind_mapper(py::module_& m) {
       .def("stats", &PyMapper::stats)
       .def("timings", &PyMapper::timings, "per stage: count, mean_ms, median_ms, p95_ms, total_ms")
       .def_property_readonly("camera", &PyMapper::camera)
-      .def("config_yaml", &PyMapper::config_yaml, "the configuration in use, as YAML");
+      .def("config_yaml", &PyMapper::config_yaml, "the configuration in use, as YAML")
+      .def("scene_graph", &PyMapper::scene_graph, "the scene graph now, as scene_graph.json's dict (issue 39)")
+      .def("distance_m", &PyMapper::distance_m, py::arg("point"),
+           "interpolated TSDF distance (m, world frame) at point, clamped at the truncation; nan where unobserved")
+      .def("is_free", &PyMapper::is_free, py::arg("point"), py::arg("radius"),
+           "whether the ball (world frame, m) is observed and in front of every surface (unobserved: not free)");
 }
 
 }  // namespace semap::python

@@ -4,6 +4,7 @@
 #include <pybind11/stl/filesystem.h>
 
 #include <filesystem>
+#include <fstream>
 #include <optional>
 
 #include "bindings.hpp"
@@ -12,6 +13,7 @@
 #include "semap/eval/trajectory_metrics.hpp"
 #include "semap/io/trajectory_io.hpp"
 #include "semap/pipeline/map_merge.hpp"
+#include "semap/navigation/scene_graph.hpp"
 #include "semap/pipeline/run_pipeline.hpp"
 #include "semap/pipeline/semap_config.hpp"
 #include "config.hpp"
@@ -19,9 +21,10 @@
 namespace py = pybind11;
 
 namespace semap::python {
-namespace {
 
 py::object json_to_python(const nlohmann::json& j) { return py::module_::import("json").attr("loads")(j.dump()); }
+
+namespace {
 
 py::dict evaluate_ate(const std::filesystem::path& gt, const std::filesystem::path& est, double max_dt) {
   nlohmann::json j;
@@ -57,6 +60,9 @@ py::dict run(const std::filesystem::path& dataset, const std::filesystem::path& 
   {
     py::gil_scoped_release nogil;
     j = to_json(run_pipeline(options, parsed));
+    // What the run published: report.json adds the map's figures (consistency, gravity,
+    // navigation) to the run's result.
+    if (std::ifstream published(out / "report.json"); published) j = nlohmann::json::parse(published);
   }
   return json_to_python(j);
 }
@@ -112,6 +118,8 @@ PYBIND11_MODULE(_semap, m) {
   m.def("merge_maps", &merge_maps, py::arg("a"), py::arg("b"), py::arg("out"),
         "`semap merge A B --out OUT`: map B relocalised into map A and fused in A's world frame; returns the "
         "report (summary.merged false and summary.reason when B does not relocalise: nothing written)");
+  m.def("load_scene_graph", [](const std::filesystem::path& out) { return json_to_python(to_json(semap::load_scene_graph(out))); },
+        py::arg("out"), "OUT/scene_graph.json (or that file) as a dict, validated (issue 39)");
   m.def("class_names", &class_names, "the project's classes; index = class id");
   m.def("class_colors", &class_colors, "(C, 3) uint8 palette; row = class id");
   m.def("default_config", &semap::dump_default_config, "YAML of every parameter with its default");
