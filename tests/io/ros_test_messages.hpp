@@ -11,6 +11,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "io/image_io.hpp"
 #include "semap/io/dataset.hpp"
 #include "test_rosbag_writer.hpp"
 #include "test_support.hpp"
@@ -138,6 +139,32 @@ inline double mean_abs_diff(const cv::Mat& a, const cv::Mat& b) {
   cv::Mat d;
   cv::absdiff(a, b, d);
   return cv::mean(d)[0];
+}
+
+/// Topics of a camera driver's recording.
+struct CameraTopics {
+  std::string colour, colour_info, depth, depth_info;
+};
+
+/// The first `frames` frames of a TUM fr1 folder as the camera drivers record them: the raw
+/// (distorted) images, rgb8 colour and 32FC1 depth (NaN = none, each with its own timestamp from
+/// the file names), camera_info with fr1's plumb_bob distortion, plus an /imu topic. `Bag` is
+/// either test writer (ROS 1 or rosbag2).
+template <class Bag>
+void write_tum_frames(Bag& bag, const DatasetReader& folder, size_t frames, const CameraTopics& topics) {
+  const CameraModel lens = tum_camera_preset(1);
+  for (size_t i = 0; i < frames; ++i) {
+    const Frame f = folder.load(i);
+    const cv::Mat raw_rgb = cv::imread(f.rgb_path, cv::IMREAD_COLOR);
+    const cv::Mat raw_depth_m = read_depth_image(f.depth_path, lens.depth_scale);
+    const RosStamp rgb_t = stamp_from_text(fs::path(f.rgb_path).stem().string());
+    const RosStamp depth_t = stamp_from_text(fs::path(f.depth_path).stem().string());
+    bag.write(colour_message(topics.colour, rgb_t, raw_rgb, "rgb8"));
+    bag.write(info_message(topics.colour_info, rgb_t, lens.depth, lens.distortion));
+    bag.write(depth_message(topics.depth, depth_t, raw_depth_m, "32FC1"));
+    bag.write(info_message(topics.depth_info, depth_t, lens.depth, lens.distortion));
+    bag.write_imu("/imu", rgb_t);
+  }
 }
 
 }  // namespace semap::test::ros

@@ -35,24 +35,11 @@ using namespace test::ros;
 constexpr size_t kSliceFrames = 40;  // a short slice: tracking twice stays well under a minute
 
 
-/// The first `frames` frames of the TUM fr1 folder as a bag laid out like TUM's own: the raw
-/// (distorted) images, rgb8 colour and 32FC1 depth (each with its own timestamp from the file
-/// names), camera_info with fr1's plumb_bob distortion, plus an IMU topic.
+/// A bag laid out like TUM's own ROS 1 bags.
 void write_tum_bag(const DatasetReader& folder, size_t frames, const fs::path& bag_path, bool lz4) {
   BagWriter bag(bag_path, lz4);
-  const CameraModel lens = tum_camera_preset(1);
-  for (size_t i = 0; i < frames; ++i) {
-    const Frame f = folder.load(i);
-    const cv::Mat raw_rgb = cv::imread(f.rgb_path, cv::IMREAD_COLOR);
-    const cv::Mat raw_depth_m = read_depth_image(f.depth_path, lens.depth_scale);
-    const RosStamp rgb_t = stamp_from_text(fs::path(f.rgb_path).stem().string());
-    const RosStamp depth_t = stamp_from_text(fs::path(f.depth_path).stem().string());
-    bag.write(colour_message("/camera/rgb/image_color", rgb_t, raw_rgb, "rgb8"));
-    bag.write(info_message("/camera/rgb/camera_info", rgb_t, lens.depth, lens.distortion));
-    bag.write(depth_message("/camera/depth/image", depth_t, raw_depth_m, "32FC1"));
-    bag.write(info_message("/camera/depth/camera_info", depth_t, lens.depth, lens.distortion));
-    bag.write_imu("/imu", rgb_t);
-  }
+  write_tum_frames(bag, folder, frames,
+                   {"/camera/rgb/image_color", "/camera/rgb/camera_info", "/camera/depth/image", "/camera/depth/camera_info"});
 }
 
 

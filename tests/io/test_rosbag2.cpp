@@ -53,23 +53,12 @@ std::vector<Variant> variants() {
   };
 }
 
-/// The slice as the ROS 2 camera drivers record it: rgb8 colour, 32FC1 depth (NaN = none),
-/// CameraInfo with fr1's plumb_bob distortion, an IMU topic.
+/// The slice with the ROS 2 camera drivers' topic names.
 void write_tum_bag(const DatasetReader& folder, const Variant& v, const fs::path& path) {
   Rosbag2Writer bag(path, v.options);
-  const CameraModel lens = tum_camera_preset(1);
-  for (size_t i = 0; i < kSliceFrames; ++i) {
-    const Frame f = folder.load(i);
-    const cv::Mat raw_rgb = cv::imread(f.rgb_path, cv::IMREAD_COLOR);
-    const cv::Mat raw_depth_m = read_depth_image(f.depth_path, lens.depth_scale);
-    const RosStamp rgb_t = stamp_from_text(fs::path(f.rgb_path).stem().string());
-    const RosStamp depth_t = stamp_from_text(fs::path(f.depth_path).stem().string());
-    bag.write(colour_message("/camera/color/image_raw", rgb_t, raw_rgb, "rgb8"));
-    bag.write(info_message("/camera/color/camera_info", rgb_t, lens.depth, lens.distortion));
-    bag.write(depth_message("/camera/depth/image_raw", depth_t, raw_depth_m, "32FC1"));
-    bag.write(info_message("/camera/depth/camera_info", depth_t, lens.depth, lens.distortion));
-    bag.write_imu("/imu", rgb_t);
-  }
+  write_tum_frames(bag, folder, kSliceFrames,
+                   {"/camera/color/image_raw", "/camera/color/camera_info", "/camera/depth/image_raw",
+                    "/camera/depth/camera_info"});
 }
 
 class TumRosbag2 : public ::testing::Test {
