@@ -248,8 +248,7 @@ class BagWalk {
       }
       pos = m.data_offset + m.data_bytes;
     }
-    for (const auto& [pos, conn] : summary.messages)
-      if (!connections_.count(conn)) check_.fail("in the chunk " + where, "message of unknown connection " + std::to_string(conn));
+    for (const auto& [pos, conn] : summary.messages) used_connections_.insert(conn);  // checked at the end
     chunks_[r.offset] = std::move(summary);
     last_chunk_ = r.offset;
   }
@@ -284,13 +283,13 @@ class BagWalk {
     // librosbag reads one index record after the chunk per connection listed here.
     if (count > it->second.index_records) check_.fail(where, "chunk info lists more connections than its chunk has index records");
     const auto data = read_at(r.data_offset, r.data_bytes);
-    for (uint64_t k = 0; k < count; ++k)
-      if (!connections_.count(Checker::u32(data.data() + 8 * k)))
-        check_.fail(where, "chunk info names an unknown connection");
+    for (uint64_t k = 0; k < count; ++k) used_connections_.insert(Checker::u32(data.data() + 8 * k));
   }
 
   /// librosbag seeks to index_pos and reads conn_count connections, then chunk_count chunk infos.
   void check_index_section() {
+    for (const uint32_t conn : used_connections_)
+      if (!connections_.count(conn)) throw Error(bag_, "corrupt ROS bag: messages of connection " + std::to_string(conn) + ", which no connection record defines");
     if (index_pos_ == 0) throw Error(bag_, "the bag is not indexed (recording cut off?): run `rosbag reindex` on it");
     size_t k = 0;
     while (k < ops_.size() && ops_[k].first != index_pos_) ++k;
@@ -309,7 +308,7 @@ class BagWalk {
   uint64_t file_bytes_ = 0;
   uint64_t index_pos_ = 0, connection_count_ = 0, chunk_count_ = 0;
   std::vector<std::pair<uint64_t, uint8_t>> ops_;  ///< top-level records: offset, op
-  std::set<uint32_t> connections_;
+  std::set<uint32_t> connections_, used_connections_;  ///< defined by connection records; used by messages
   std::map<uint64_t, ChunkSummary> chunks_;  ///< by the chunk record's offset
   std::optional<uint64_t> last_chunk_;
 };
