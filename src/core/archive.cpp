@@ -2,6 +2,7 @@
 
 #include <libdeflate.h>
 
+#include <algorithm>
 #include <memory>
 
 #include "core/paths.hpp"
@@ -92,24 +93,35 @@ ArchiveSections read_map_archive(const std::filesystem::path& path) {
   const std::string_view body = std::string_view(bytes).substr(checked_from, bytes.size() - 8 - checked_from);
   if (fnv1a(body) != stored_sum) throw Error(path, "checksum mismatch (corrupt or truncated map file)");
   ByteReader r(body, path, "section table");
-  ArchiveSections sections;
+  // The whole table first, so that the declared sizes are checked before anything is inflated.
+  struct Entry {
+    std::string name;
+    uint64_t raw_bytes = 0;
+    std::string_view stored;
+  };
+  std::vector<Entry> table;
+  const uint64_t max_raw_bytes = kMapInflationAllowanceBytes + kMaxMapInflation * bytes.size();
+  uint64_t raw_total = 0;
   const uint32_t count = r.get<uint32_t>();
   for (uint32_t i = 0; i < count; ++i) {
     const uint32_t name_bytes = r.get<uint32_t>();
     if (name_bytes == 0 || name_bytes > 64) r.fail("bad section name length " + std::to_string(name_bytes));
-    std::string name(name_bytes, '\0');
-    r.read(name.data(), name_bytes);
-    std::string payload;
-    if (version == kUncompressedVersion) {
-      payload.resize(r.get_count(1));
-      r.read(payload.data(), payload.size());
-    } else {
-      const uint64_t raw_bytes = r.get<uint64_t>();
-      std::string stored(r.get_count(1), '\0');
-      r.read(stored.data(), stored.size());
-      payload = decompress(stored, raw_bytes, r);
-    }
-    if (!sections.emplace(std::move(name), std::move(payload)).second) r.fail("a section appears twice");
+    Entry e;
+    e.name.resize(name_bytes);
+    r.read(e.name.data(), name_bytes);
+    e.raw_bytes = version == kUncompressedVersion ? 0 : r.get<uint64_t>();
+    e.stored = r.get_view(r.get_count(1));
+    raw_total += std::min(e.raw_bytes, max_raw_bytes + 1);  // no wrap-around
+    if (raw_total > max_raw_bytes)
+      r.fail("sections declare more than " + std::to_string(max_raw_bytes) + " bytes inflated (" +
+             std::to_string(kMaxMapInflation) + " x the file's " + std::to_string(bytes.size()) + " bytes + " +
+             std::to_string(kMapInflationAllowanceBytes >> 20) + " MiB): not a map semap wrote");
+    table.push_back(std::move(e));
+  }
+  ArchiveSections sections;
+  for (Entry& e : table) {
+    std::string payload = version == kUncompressedVersion ? std::string(e.stored) : decompress(e.stored, e.raw_bytes, r);
+    if (!sections.emplace(std::move(e.name), std::move(payload)).second) r.fail("a section appears twice");
   }
   r.expect_end();
   return sections;

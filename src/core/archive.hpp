@@ -28,6 +28,13 @@ inline constexpr uint32_t kMapArchiveVersion = 3;
 
 using ArchiveSections = std::map<std::string, std::string>;
 
+/// Issue 44: the sections of a map file together inflate to at most
+/// kMapInflationAllowanceBytes + kMaxMapInflation x the file's size, checked against the
+/// declared sizes before any section is decompressed. Real maps shrink 3-4x (keyframe images,
+/// voxels); DEFLATE itself allows ~1032:1, so a 2 MB file could otherwise claim 2 GB.
+inline constexpr uint64_t kMaxMapInflation = 64;
+inline constexpr uint64_t kMapInflationAllowanceBytes = uint64_t{64} << 20;
+
 /// Writes the archive atomically (core/paths.hpp).
 void write_map_archive(const std::filesystem::path& path, const ArchiveSections& sections);
 /// Reads and checks the whole archive: magic, version (an older or newer one is an error naming
@@ -73,6 +80,12 @@ class ByteReader {
     if (n > bytes_.size() - pos_) fail("truncated");
     std::memcpy(dst, bytes_.data() + pos_, n);
     pos_ += n;
+  }
+  /// The next n bytes without copying them (a view into the reader's bytes).
+  std::string_view get_view(size_t n) {
+    if (n > bytes_.size() - pos_) fail("truncated");
+    pos_ += n;
+    return bytes_.substr(pos_ - n, n);
   }
   std::string get_string();
   /// A count of items of `item_bytes` each that must fit in what is left (no huge allocations

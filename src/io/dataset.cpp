@@ -78,7 +78,8 @@ void DatasetReader::check_index(size_t i) const {
     throw Error(root_, "frame " + std::to_string(i) + " out of range (" + std::to_string(records_.size()) + " frames)");
 }
 
-void DatasetReader::set_camera(const CameraModel& stored) {
+void DatasetReader::set_camera(const CameraModel& stored, const std::string& source) {
+  validate_camera(stored, source);  // before the undistortion maps are built from it
   undistortion_ = stored.has_distortion() ? std::make_shared<const LensUndistortion>(stored) : nullptr;
   camera_ = LensUndistortion::pinhole(stored);
 }
@@ -187,7 +188,6 @@ std::unique_ptr<DatasetReader> open_layout(const fs::path& root, const DatasetOp
   else if (layout == "scannet") reader = io_detail::open_scannet(root, y);
   else throw Error(root / "dataset.yaml", "unknown format '" + layout + "' (tum, 7scenes, ycb, synthetic, scannet)");
   if (reader->size() == 0) throw Error(root, "dataset has no frames");
-  validate_camera(reader->camera(), root.string());  // every layout; the readers name their camera file first
   return reader;
 }
 

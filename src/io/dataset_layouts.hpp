@@ -52,7 +52,7 @@ class LayoutDataset : public DatasetReader {
   LayoutDataset(std::string format, std::filesystem::path root, CameraModel camera, std::vector<FrameRecord> records)
       : format_(std::move(format)) {
     root_ = std::move(root);
-    set_camera(camera);
+    set_camera(camera, root_.string());  // the readers name their camera file first
     records_ = std::move(records);
   }
   std::string format() const override { return format_; }

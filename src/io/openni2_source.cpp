@@ -171,6 +171,7 @@ void OpenNI2Source::open(const std::string& target) {
     throw Error(where, "cannot start the colour and depth streams: " + pcl_reason(e.what()));
   }
   camera_ = camera_of(*device, where);
+  validate_camera(camera_, where);  // issue 44: the same camera check as every dataset reader
 }
 
 Frame OpenNI2Source::convert(const pcl::io::Image& image, const pcl::io::DepthImage& depth) const {

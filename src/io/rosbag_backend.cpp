@@ -8,53 +8,92 @@
 #include <console_bridge/console.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
-#include <sensor_msgs/CameraInfo.h>
-#include <sensor_msgs/CompressedImage.h>
-#include <sensor_msgs/Image.h>
 
+#include <cstring>
 #include <mutex>
 #include <new>
+#include <string>
+
+#include "io/rosbag_validate.hpp"
 
 namespace semap::io_detail::rosbag_backend {
 
 namespace {
 
-// Header and image metadata only: deserialised from the record without copying the pixels.
-// The "*" MD5 sum makes rosbag accept it for any connection; callers check the datatype.
+// Our own message types, read with checked lengths (issue 44): ROS's generated deserialisers
+// resize a vector to its declared length before checking it against the message (a CameraInfo
+// declaring 0x20000001 distortion coefficients wraps the byte count and allocates 4 GiB), so
+// every variable-length array here is checked against the bytes left first. The "*" MD5 sum
+// makes rosbag accept them for any connection; callers check the datatype (datatype_is).
+
+/// Header and image metadata only, without copying the pixels.
 template <bool kCompressed>
 struct MetaMessage {
   ImageMeta meta;
+};
+struct ImageMessage {
+  ImageData image;
+};
+struct CompressedMessage {
+  CompressedData image;
+};
+struct CameraInfoMessage {
+  CameraInfoData info;
 };
 
 }  // namespace
 }  // namespace semap::io_detail::rosbag_backend
 
+#define SEMAP_ANY_ROS_MESSAGE(T)                                  \
+  template <>                                                     \
+  struct MD5Sum<T> {                                              \
+    static const char* value() { return "*"; }                    \
+    static const char* value(const T&) { return "*"; }            \
+  };                                                              \
+  template <>                                                     \
+  struct DataType<T> {                                            \
+    static const char* value() { return "*"; }                    \
+    static const char* value(const T&) { return "*"; }            \
+  };
 namespace ros::message_traits {
-template <bool C>
-struct MD5Sum<semap::io_detail::rosbag_backend::MetaMessage<C>> {
-  static const char* value() { return "*"; }
-  static const char* value(const semap::io_detail::rosbag_backend::MetaMessage<C>&) { return "*"; }
-};
-template <bool C>
-struct DataType<semap::io_detail::rosbag_backend::MetaMessage<C>> {
-  static const char* value() { return "*"; }
-  static const char* value(const semap::io_detail::rosbag_backend::MetaMessage<C>&) { return "*"; }
-};
+SEMAP_ANY_ROS_MESSAGE(semap::io_detail::rosbag_backend::MetaMessage<false>)
+SEMAP_ANY_ROS_MESSAGE(semap::io_detail::rosbag_backend::MetaMessage<true>)
+SEMAP_ANY_ROS_MESSAGE(semap::io_detail::rosbag_backend::ImageMessage)
+SEMAP_ANY_ROS_MESSAGE(semap::io_detail::rosbag_backend::CompressedMessage)
+SEMAP_ANY_ROS_MESSAGE(semap::io_detail::rosbag_backend::CameraInfoMessage)
 }  // namespace ros::message_traits
+#undef SEMAP_ANY_ROS_MESSAGE
 
 namespace ros::serialization {
+
+/// A length-prefixed array of T, its length checked against the bytes left before allocating.
+template <typename Stream, typename T>
+void next_checked(Stream& stream, std::vector<T>& v) {
+  uint32_t count = 0;
+  stream.next(count);
+  if (count > stream.getLength() / sizeof(T))
+    throw StreamOverrunException("array of " + std::to_string(count) + " elements overruns its message");
+  v.resize(count);
+  if (count > 0) std::memcpy(v.data(), stream.advance(static_cast<uint32_t>(count * sizeof(T))), count * sizeof(T));
+}
+
+/// std_msgs/Header: seq, stamp, frame_id.
+template <typename Stream>
+void next_header(Stream& stream, semap::io_detail::rosbag_backend::Stamp& stamp) {
+  uint32_t seq = 0;
+  std::string frame_id;
+  stream.next(seq);
+  stream.next(stamp.sec);
+  stream.next(stamp.nsec);
+  stream.next(frame_id);
+}
+
 template <bool C>
 struct Serializer<semap::io_detail::rosbag_backend::MetaMessage<C>> {
-  // std_msgs/Header (seq, stamp, frame_id), then Image: height, width, encoding, ... or
-  // CompressedImage: format, data.
+  // Image: height, width, encoding, ...; CompressedImage: format, data.
   template <typename Stream>
   static void read(Stream& stream, semap::io_detail::rosbag_backend::MetaMessage<C>& m) {
-    uint32_t seq = 0;
-    std::string frame_id;
-    stream.next(seq);
-    stream.next(m.meta.header_stamp.sec);
-    stream.next(m.meta.header_stamp.nsec);
-    stream.next(frame_id);
+    next_header(stream, m.meta.header_stamp);
     if constexpr (!C) {
       stream.next(m.meta.height);
       stream.next(m.meta.width);
@@ -62,6 +101,52 @@ struct Serializer<semap::io_detail::rosbag_backend::MetaMessage<C>> {
     stream.next(m.meta.encoding);
   }
 };
+
+template <>
+struct Serializer<semap::io_detail::rosbag_backend::ImageMessage> {
+  // sensor_msgs/Image: header, height, width, encoding, is_bigendian, step, data.
+  template <typename Stream>
+  static void read(Stream& stream, semap::io_detail::rosbag_backend::ImageMessage& m) {
+    semap::io_detail::rosbag_backend::Stamp stamp;
+    uint8_t big_endian = 0;
+    next_header(stream, stamp);
+    stream.next(m.image.height);
+    stream.next(m.image.width);
+    stream.next(m.image.encoding);
+    stream.next(big_endian);
+    stream.next(m.image.step);
+    next_checked(stream, m.image.data);
+    m.image.big_endian = big_endian != 0;
+  }
+};
+
+template <>
+struct Serializer<semap::io_detail::rosbag_backend::CompressedMessage> {
+  // sensor_msgs/CompressedImage: header, format, data.
+  template <typename Stream>
+  static void read(Stream& stream, semap::io_detail::rosbag_backend::CompressedMessage& m) {
+    semap::io_detail::rosbag_backend::Stamp stamp;
+    next_header(stream, stamp);
+    stream.next(m.image.format);
+    next_checked(stream, m.image.data);
+  }
+};
+
+template <>
+struct Serializer<semap::io_detail::rosbag_backend::CameraInfoMessage> {
+  // sensor_msgs/CameraInfo: header, height, width, distortion_model, D, K (R, P, binning and
+  // ROI follow and are not read).
+  template <typename Stream>
+  static void read(Stream& stream, semap::io_detail::rosbag_backend::CameraInfoMessage& m) {
+    next_header(stream, m.info.header_stamp);
+    stream.next(m.info.height);
+    stream.next(m.info.width);
+    stream.next(m.info.distortion_model);
+    next_checked(stream, m.info.D);
+    for (double& k : m.info.K) stream.next(k);
+  }
+};
+
 }  // namespace ros::serialization
 
 namespace semap::io_detail::rosbag_backend {
@@ -88,11 +173,13 @@ ImageMeta meta_of(const rosbag::MessageInstance& m, const std::filesystem::path&
   return meta;
 }
 
-CompressedData compressed_of(sensor_msgs::CompressedImage& msg) {
-  CompressedData out;
-  out.format = msg.format;
-  out.data.swap(msg.data);
-  return out;
+/// The message deserialised as T after checking its connection's datatype.
+template <class T>
+boost::shared_ptr<T> instantiate(const rosbag::MessageInstance& m, const char* datatype, const std::filesystem::path& bag) {
+  if (m.getDataType() != datatype) throw Error(bag, m.getTopic() + " is " + m.getDataType() + ", not " + datatype);
+  auto p = m.instantiate<T>();
+  if (!p) throw Error(bag, m.getTopic() + ": unreadable " + datatype + " message");
+  return p;
 }
 
 }  // namespace
@@ -123,11 +210,10 @@ struct Bag::Impl {
   }
 
   template <class T>
-  boost::shared_ptr<T> first(const std::string& topic) {
+  boost::shared_ptr<T> first(const std::string& topic, const char* datatype) {
     rosbag::View view(bag, rosbag::TopicQuery(topic));
-    for (const rosbag::MessageInstance& m : view)
-      if (auto p = m.instantiate<T>()) return p;
-    throw Error(path, "topic " + topic + " has no readable message");
+    for (const rosbag::MessageInstance& m : view) return instantiate<T>(m, datatype, path);
+    throw Error(path, "topic " + topic + " has no message");
   }
 
   const rosbag::MessageInstance& message(size_t handle) const {
@@ -140,6 +226,7 @@ Bag::Bag(const std::filesystem::path& path) : impl_(std::make_unique<Impl>()) {
   impl_->path = path;
   // rosbag also logs its errors through console_bridge; the exception says it once.
   console_bridge::setLogLevel(console_bridge::CONSOLE_BRIDGE_LOG_NONE);
+  validate_ros1_bag(path);  // issue 44: librosbag trusts every offset and length in the file
   impl_->guarded("cannot open bag", [&] {
     impl_->bag.open(path.string(), rosbag::bagmode::Read);
     return 0;
@@ -174,21 +261,13 @@ ImageMeta Bag::first_image_meta(const std::string& topic) const {
 
 CompressedData Bag::first_compressed(const std::string& topic) const {
   return impl_->guarded("cannot read " + topic, [&] {
-    return compressed_of(*impl_->first<sensor_msgs::CompressedImage>(topic));
+    return impl_->first<CompressedMessage>(topic, "sensor_msgs/CompressedImage")->image;
   });
 }
 
 CameraInfoData Bag::first_camera_info(const std::string& topic) const {
   return impl_->guarded("cannot read " + topic, [&] {
-    const auto info = impl_->first<sensor_msgs::CameraInfo>(topic);
-    CameraInfoData out;
-    out.header_stamp = stamp_of(info->header.stamp);
-    out.width = info->width;
-    out.height = info->height;
-    for (size_t k = 0; k < 9; ++k) out.K[k] = info->K[k];
-    out.distortion_model = info->distortion_model;
-    out.D = info->D;
-    return out;
+    return impl_->first<CameraInfoMessage>(topic, "sensor_msgs/CameraInfo")->info;
   });
 }
 
@@ -211,24 +290,13 @@ std::vector<IndexedMessage> Bag::index(const std::vector<std::string>& topics) c
 
 ImageData Bag::read_image(size_t handle) const {
   return impl_->guarded("cannot read an image message", [&] {
-    const auto msg = impl_->message(handle).instantiate<sensor_msgs::Image>();
-    if (!msg) throw Error(impl_->path, impl_->message(handle).getTopic() + ": not a sensor_msgs/Image");
-    ImageData out;
-    out.width = msg->width;
-    out.height = msg->height;
-    out.step = msg->step;
-    out.big_endian = msg->is_bigendian != 0;
-    out.encoding = msg->encoding;
-    out.data.swap(msg->data);
-    return out;
+    return std::move(instantiate<ImageMessage>(impl_->message(handle), "sensor_msgs/Image", impl_->path)->image);
   });
 }
 
 CompressedData Bag::read_compressed(size_t handle) const {
   return impl_->guarded("cannot read a compressed image message", [&] {
-    const auto msg = impl_->message(handle).instantiate<sensor_msgs::CompressedImage>();
-    if (!msg) throw Error(impl_->path, impl_->message(handle).getTopic() + ": not a sensor_msgs/CompressedImage");
-    return compressed_of(*msg);
+    return std::move(instantiate<CompressedMessage>(impl_->message(handle), "sensor_msgs/CompressedImage", impl_->path)->image);
   });
 }
 

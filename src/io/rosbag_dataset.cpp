@@ -387,6 +387,15 @@ CameraModel bag_camera(const rb::BagSource& bag, const std::vector<rb::Topic>& t
   camera.depth_scale = kRosDepthScale;
   if (!depth_info) spdlog::warn("{}: no CameraInfo for {}; using {} (depth registered to colour)", path.string(), depth.name, *rgb_info);
   const std::string depth_info_name = depth_info ? *depth_info : *rgb_info;
+  // Issue 44: one CameraInfo serves both cameras (registered images) only at one resolution. At
+  // another, the second camera's intrinsics are unknown: scaling them is right only for the same
+  // lens and sensor crop, which a bag does not say, so it is an error (also when the CameraInfo
+  // gives no size to compare with).
+  const auto size_text = [](const rb::ImageMeta& m) { return std::to_string(m.width) + "x" + std::to_string(m.height); };
+  if ((!rgb_info || *rgb_info == depth_info_name) && size_text(rgb_meta) != size_text(depth_meta))
+    throw Error(path, "only " + depth_info_name + " describes both " + rgb.name + " (" + size_text(rgb_meta) + ") and " +
+                          depth.name + " (" + size_text(depth_meta) + "): the intrinsics at the other resolution are "
+                          "unknown (give each image topic its own CameraInfo)");
   const rb::CameraInfoData depth_camera_info = bag.first_camera_info(depth_info_name);
   camera.depth = intrinsics_from(depth_camera_info, depth_meta, path, depth_info_name);
   camera.distortion = distortion_from(depth_camera_info, path, depth_info_name);
@@ -394,16 +403,12 @@ CameraModel bag_camera(const rb::BagSource& bag, const std::vector<rb::Topic>& t
   const rb::CameraInfoData rgb_camera_info = bag.first_camera_info(rgb_info_name);
   PinholeIntrinsics colour = intrinsics_from(rgb_camera_info, rgb_meta, path, rgb_info_name);
   if (!(colour == camera.depth)) {
-    if (!rgb_info) throw Error(path, "colour images are " + std::to_string(rgb_meta.width) + "x" + std::to_string(rgb_meta.height) +
-                                         ", depth images " + std::to_string(depth_meta.width) + "x" + std::to_string(depth_meta.height) +
-                                         ", and " + rgb.name + " has no CameraInfo");
     spdlog::warn("{}: colour and depth cameras differ; registering colour to depth with an identity extrinsic "
                  "(the bag's /tf is not read)", path.string());
     camera.colour = CameraModel::ColourCamera{colour, Pose::Identity()};
     if (distortion_from(rgb_camera_info, path, rgb_info_name) != std::array<double, 5>{0, 0, 0, 0, 0})
       spdlog::warn("{}: {} has lens distortion; only the depth camera's is corrected", path.string(), rgb_info_name);
   }
-  validate_camera(camera, path.string());  // before the undistortion maps are built from it
   return camera;
 }
 
@@ -439,7 +444,7 @@ std::unique_ptr<DatasetReader> open_bag_source(std::unique_ptr<rb::BagSource> ba
   const CameraModel camera = bag_camera(*bag, topics, rgb, depth);
   const rb::BagSource& bag_ref = *bag;
   auto reader = std::make_unique<RosbagDataset>(format, std::move(bag), rgb, depth);
-  reader->set_camera(camera);
+  reader->set_camera(camera, path.string());
   index_frames(*reader, bag_ref, rgb, depth);
   // TUM publishes each bag's ground truth beside it as <name>-groundtruth.txt.
   const fs::path gt = path.parent_path() / (path.stem().string() + "-groundtruth.txt");

@@ -287,12 +287,14 @@ void SensDataset::read_header(SensCursor& in) {
   const uint32_t dw = image_side(in, root_, "depth width"), dh = image_side(in, root_, "depth height");
   const float depth_shift = in.read<float>("depth shift");
   if (!(depth_shift > 0 && std::isfinite(depth_shift))) throw Error(root_, "invalid depth shift");
-  camera_.depth_scale = depth_shift;
-  camera_.depth = intrinsics_of(k_depth, dw, dh, root_, "depth");
+  CameraModel camera;
+  camera.depth_scale = depth_shift;
+  camera.depth = intrinsics_of(k_depth, dw, dh, root_, "depth");
   CameraModel::ColourCamera colour{intrinsics_of(k_colour, cw, ch, root_, "colour"),
                                    depth_from_colour(pose_from_rows(e_colour, root_.string() + ": colour extrinsics"),
                                                      pose_from_rows(e_depth, root_.string() + ": depth extrinsics"))};
-  if (!(colour.intrinsics == camera_.depth) || !colour.T_depth_colour.matrix().isIdentity(1e-12)) camera_.colour = colour;
+  if (!(colour.intrinsics == camera.depth) || !colour.T_depth_colour.matrix().isIdentity(1e-12)) camera.colour = colour;
+  set_camera(camera, root_.string());  // issue 44: the same camera check as every reader
 }
 
 void SensDataset::read_frames(SensCursor& in) {

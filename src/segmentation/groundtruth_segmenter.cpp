@@ -16,7 +16,7 @@
 namespace semap {
 
 
-SegmentationResult result_from_label_images(const cv::Mat& labels, const cv::Mat& instances) {
+SegmentationResult result_from_label_images(const cv::Mat& labels, const cv::Mat& instances, const std::string& where) {
   CV_Assert(labels.type() == CV_8UC1);
   SegmentationResult r;
   r.labels = labels.clone();
@@ -35,6 +35,7 @@ SegmentationResult result_from_label_images(const cv::Mat& labels, const cv::Mat
           ++it->second[std::min<int>(lab[x], kNumClasses - 1)];
         }
     }
+    check_instance_count(hist.size(), labels.size(), where);  // before a mask per instance
     for (auto& [iid, h] : hist) {
       // Majority label, ignoring unlabelled when any label exists.
       int best = 0;
@@ -74,7 +75,7 @@ SegmentationResult GroundTruthSegmenter::segment(const Frame& frame) {
   if (!frame.has_labels())
     throw Error(frame.rgb_path.empty() ? std::string("groundtruth segmenter") : frame.rgb_path,
                 "frame has no ground-truth labels (use a synthetic or YCB-Video dataset, or precomputed:DIR)");
-  SegmentationResult r = result_from_label_images(frame.labels, frame.instances);
+  SegmentationResult r = result_from_label_images(frame.labels, frame.instances, frame.rgb_path.empty() ? "ground-truth instances" : frame.rgb_path);
   r.frame_index = frame.index;
   r.timestamp = frame.timestamp;
   return r;
@@ -127,7 +128,8 @@ SegmentationResult PrecomputedSegmenter::read(const std::string& name) const {
   SegmentationResult r;
   r.labels = labels;
   if (!inst16.empty()) r.instance_ids = inst16;
-  if (!j.contains("instances")) return result_from_label_images(labels, inst16);
+  if (!j.contains("instances")) return result_from_label_images(labels, inst16, inst_path.string());
+  if (j.at("instances").is_array()) check_instance_count(j.at("instances").size(), labels.size(), json_path.string());
   try {
     for (const auto& ji : j.at("instances")) {
       InstanceDetection inst;

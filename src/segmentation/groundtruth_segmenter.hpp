@@ -14,8 +14,10 @@ namespace semap {
 
 /// Instances from a label + instance image pair (project ids): one instance per non-zero
 /// instance id, its class the majority label under its mask, score 1, one-hot class scores.
-/// Without an instance image, each non-stuff class present becomes one instance.
-SegmentationResult result_from_label_images(const cv::Mat& labels, const cv::Mat& instances);
+/// Without an instance image, each non-stuff class present becomes one instance. More instance
+/// ids than check_instance_count allows throw semap::Error naming `where` (the instance image).
+SegmentationResult result_from_label_images(const cv::Mat& labels, const cv::Mat& instances,
+                                            const std::string& where = "instance image");
 
 class GroundTruthSegmenter : public Segmenter {
  public:

@@ -5,6 +5,8 @@
 #include <numeric>
 #include <opencv2/imgproc.hpp>
 
+#include "semap/core/error.hpp"
+
 namespace semap {
 
 cv::Mat letterbox_image(const cv::Mat& image, cv::Size input, int pad_value, Letterbox& t) {
@@ -36,6 +38,15 @@ void paint_instances(SegmentationResult& result, cv::Size size) {
     result.labels.setTo(inst.class_id, inst.mask);
     result.instance_ids.setTo(inst.id, inst.mask);
   }
+}
+
+void check_instance_count(size_t count, cv::Size size, const std::string& where) {
+  const uint64_t pixels = uint64_t(std::max(size.area(), 1));
+  const uint64_t max_count = kMaxInstanceMaskBytes / pixels;
+  if (count > max_count)
+    throw Error(where, std::to_string(count) + " instances in one " + std::to_string(size.width) + "x" + std::to_string(size.height) +
+                           " frame: more than the " + std::to_string(max_count) + " whose masks fit in " +
+                           std::to_string(kMaxInstanceMaskBytes >> 20) + " MiB");
 }
 
 std::vector<float> one_hot_scores(ClassId c, float score) {

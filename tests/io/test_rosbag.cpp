@@ -345,9 +345,9 @@ TEST_F(BagEncodings, CorruptAndTruncatedBags) {
   test::write_bytes(dir_ / "truncated.bag", bytes.substr(0, bytes.size() / 2));
   one_line_naming(dir_ / "truncated.bag", "bag");
   test::write_bytes(dir_ / "garbage.bag", std::string(4096, 'x'));
-  one_line_naming(dir_ / "garbage.bag", "cannot open bag");
+  one_line_naming(dir_ / "garbage.bag", "not a ROS bag of format 2.0");
   test::write_bytes(dir_ / "empty.bag", "");
-  one_line_naming(dir_ / "empty.bag", "cannot open bag");
+  one_line_naming(dir_ / "empty.bag", "not a ROS bag of format 2.0");
   EXPECT_TRUE(throws_naming([&] { open_dataset(dir_ / "absent.bag"); }, "absent.bag: file not found"));
   // A message whose pixels were cut: the record is intact but the image is short.
   const fs::path short_image = dir_ / "short.bag";

@@ -51,8 +51,11 @@ class DatasetReader {
   virtual Frame decode(size_t i) const;
   virtual cv::Mat decode_depth(size_t i) const;
   /// Sets the camera of the stored images; with lens distortion, load() undistorts and
-  /// camera() reports the pinhole model.
-  void set_camera(const CameraModel& stored);
+  /// camera() reports the pinhole model. The one camera check every reader goes through
+  /// (issue 44): validate_camera (CameraLimits: finite, plausible intrinsics, principal point
+  /// inside the image, bounded image size) throws semap::Error naming `source` before anything
+  /// is sized from the camera.
+  void set_camera(const CameraModel& stored, const std::string& source);
   /// Frame i from its decoded images (metadata from records_[i]); checks the image sizes
   /// against the camera, errors naming `rgb_source`.
   Frame make_frame(size_t i, cv::Mat depth, cv::Mat rgb, const std::filesystem::path& rgb_source) const;
