@@ -8,6 +8,7 @@
 #include <memory>
 #include <string>
 
+#include <new>
 #include <nlohmann/json.hpp>
 
 #include "apps/semap/commands.hpp"
@@ -36,6 +37,23 @@ struct EvalOptions {
 void require_file(const std::string& path, const char* flag) {
   if (path.empty()) throw Error(flag, "missing");
   require_regular_file(path, std::string(flag) + " file");
+}
+
+/// Runs one eval command; an error other than semap::Error (std::bad_alloc, a library's
+/// std::exception) names the command's input files instead of reaching main bare (issue 44,
+/// class 8: "std::bad_alloc" without a file name).
+int naming_inputs(const EvalOptions& o, int (*command)(const EvalOptions&)) {
+  try {
+    return command(o);
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {
+    std::string inputs;
+    for (const std::string* path : {&o.gt, &o.est, &o.map, &o.out})
+      if (!path->empty()) inputs += (inputs.empty() ? "" : ", ") + *path;
+    const bool memory = dynamic_cast<const std::bad_alloc*>(&e) != nullptr;
+    throw Error(inputs, memory ? "out of memory evaluating these files" : message_text(e.what(), 2000));
+  }
 }
 
 void print_json(const nlohmann::json& j) { std::printf("%s\n", j.dump(2).c_str()); }
@@ -183,7 +201,7 @@ void add_eval_command(CLI::App& app, CommandRunner& run) {
       ->capture_default_str();
   ate->add_option("--delta", opt->delta_s, "RPE time delta [s]")->check(finite_in(1e-3, 1e6))->capture_default_str();
   ate->add_flag("--json", opt->json, "print one JSON object");
-  ate->callback([&run, opt] { run = [opt] { return run_ate(*opt); }; });
+  ate->callback([&run, opt] { run = [opt] { return naming_inputs(*opt, run_ate); }; });
 
   auto* sem = cmd->add_subcommand("semantic", "Per-class IoU / mIoU, surface error, completeness of a labelled mesh");
   sem->add_option("--gt", opt->gt, "gt_points.ply (x y z label [instance])")->required();
@@ -196,7 +214,7 @@ void add_eval_command(CLI::App& app, CommandRunner& run) {
       ->check(finite_in(1e-4, 10.0))
       ->capture_default_str();
   sem->add_flag("--json", opt->json, "print one JSON object");
-  sem->callback([&run, opt] { run = [opt] { return run_semantic(*opt); }; });
+  sem->callback([&run, opt] { run = [opt] { return naming_inputs(*opt, run_semantic); }; });
 
   auto* obj = cmd->add_subcommand("objects", "Objects per class, WOv, precision/recall at 3D IoU 0.25/0.5");
   obj->add_option("--gt", opt->gt, "scene.json or gt_points.ply")->required();
@@ -209,7 +227,7 @@ void add_eval_command(CLI::App& app, CommandRunner& run) {
       ->check(finite_in(1e-3, 1.0))
       ->capture_default_str();
   obj->add_flag("--json", opt->json, "print one JSON object");
-  obj->callback([&run, opt] { run = [opt] { return run_objects(*opt); }; });
+  obj->callback([&run, opt] { run = [opt] { return naming_inputs(*opt, run_objects); }; });
 
   auto* con = cmd->add_subcommand("consistency",
                                   "Without ground truth: labelled area share, floor/wall/ceiling normals against "
@@ -220,7 +238,7 @@ void add_eval_command(CLI::App& app, CommandRunner& run) {
       ->check(finite_in(0.1, 89.0))
       ->capture_default_str();
   con->add_flag("--json", opt->json, "print one JSON object");
-  con->callback([&run, opt] { run = [opt] { return run_consistency(*opt); }; });
+  con->callback([&run, opt] { run = [opt] { return naming_inputs(*opt, run_consistency); }; });
 }
 
 }  // namespace semap::app

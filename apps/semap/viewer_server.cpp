@@ -1,12 +1,23 @@
 #include "apps/semap/viewer_server.hpp"
 
 #include <fcntl.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <arpa/inet.h>
+#include <netdb.h>
+#include <netinet/in.h>
+
+#include <algorithm>
+#include <charconv>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cstdio>
+#include <map>
+#include <mutex>
+#include <vector>
 #include <nlohmann/json.hpp>
 #include <optional>
 
@@ -48,6 +59,10 @@ namespace {
 constexpr size_t kServerThreads = 32;         // idle keep-alive connections hold one each
 constexpr time_t kReadTimeoutS = 2;           // an idle connection is dropped after this
 constexpr size_t kKeepAliveMaxRequests = 100;
+// Issue 44, class 6: a client sending one header line per second never hit the idle timeout.
+constexpr auto kRequestReadLimit = std::chrono::seconds(5);     // a whole request arrives within this
+constexpr size_t kMaxReadingConnections = kServerThreads / 2;   // the rest serve requests that arrived
+constexpr auto kWatchdogPeriod = std::chrono::milliseconds(100);
 
 
 /// The regular file a URL path names, when its real path (symlinks resolved) lies inside
@@ -146,29 +161,154 @@ void serve_file(const fs::path& root_real, const httplib::Request& req, httplib:
 }
 
 
-ViewerServer::ViewerServer(const std::string& host, int port) : host_(host) {
-  server_.new_task_queue = [] { return new httplib::ThreadPool(kServerThreads); };
-  server_.set_read_timeout(kReadTimeoutS, 0);
-  server_.set_write_timeout(10, 0);
-  server_.set_keep_alive_timeout(kReadTimeoutS);
-  server_.set_keep_alive_max_count(kKeepAliveMaxRequests);
-  server_.set_payload_max_length(1 << 16);  // GET only: no request body worth reading
+/// "address:port" of a socket's peer (numeric, as httplib's Request::remote_addr/remote_port).
+static std::string peer_key(const std::string& address, int port) { return address + "|" + std::to_string(port); }
+
+/// The open connections of one server by phase: reading a request (since when) or answering
+/// one. A watchdog thread finds the server's connected sockets (the process's sockets bound to
+/// its port; httplib 0.11 keeps them private) and cuts them with shutdown(2), which wakes the
+/// worker blocked on one: a request not complete after kRequestReadLimit, the oldest reading
+/// ones beyond kMaxReadingConnections, and on stop_all() every one. Thread-safe.
+class ConnectionGuard {
+ public:
+  using Clock = std::chrono::steady_clock;
+  ConnectionGuard() = default;
+  ~ConnectionGuard() {
+    {
+      std::lock_guard lock(mutex_);
+      quit_ = true;
+    }
+    wake_.notify_all();
+    if (watchdog_.joinable()) watchdog_.join();
+  }
+  ConnectionGuard(const ConnectionGuard&) = delete;
+  ConnectionGuard& operator=(const ConnectionGuard&) = delete;
+
+  /// Starts watching the connections to `port`.
+  void watch_port(int port) {
+    port_ = port;
+    watchdog_ = std::thread([this] { watch(); });
+  }
+  /// A request of this peer has arrived whole (answering it is not time-bounded here).
+  void request_read(const std::string& address, int port) { set_reading(peer_key(address, port), false); }
+  /// The response went out: the peer's next request (keep-alive) starts now.
+  void response_sent(const std::string& address, int port) { set_reading(peer_key(address, port), true); }
+  /// Cuts every connection, now and every one found later.
+  void stop_all() {
+    std::lock_guard lock(mutex_);
+    stopping_ = true;
+    for (const auto& [fd, key] : scan()) ::shutdown(fd, SHUT_RDWR);
+  }
+
+ private:
+  struct Connection {
+    Clock::time_point reading_since = Clock::now();
+    bool reading = true;
+    bool seen = false;
+  };
+
+  void set_reading(const std::string& key, bool reading) {
+    std::lock_guard lock(mutex_);
+    Connection& c = connections_[key];
+    c.reading = reading;
+    c.reading_since = Clock::now();
+  }
+  /// The process's sockets connected through the server's port: fd -> peer key.
+  std::vector<std::pair<int, std::string>> scan() const {
+    std::vector<std::pair<int, std::string>> out;
+    std::error_code ec;
+    for (fs::directory_iterator it("/proc/self/fd", ec), end; !ec && it != end; it.increment(ec)) {
+      int fd = -1;
+      const std::string name = it->path().filename().string();
+      if (std::from_chars(name.data(), name.data() + name.size(), fd).ec != std::errc()) continue;
+      sockaddr_storage local{}, peer{};
+      socklen_t local_size = sizeof local, peer_size = sizeof peer;
+      if (::getsockname(fd, reinterpret_cast<sockaddr*>(&local), &local_size) != 0) continue;
+      if (local.ss_family != AF_INET && local.ss_family != AF_INET6) continue;
+      const int local_port = ntohs(local.ss_family == AF_INET ? reinterpret_cast<sockaddr_in&>(local).sin_port
+                                                             : reinterpret_cast<sockaddr_in6&>(local).sin6_port);
+      if (local_port != port_ || ::getpeername(fd, reinterpret_cast<sockaddr*>(&peer), &peer_size) != 0) continue;
+      char host[NI_MAXHOST], service[NI_MAXSERV];
+      if (::getnameinfo(reinterpret_cast<sockaddr*>(&peer), peer_size, host, sizeof host, service, sizeof service,
+                        NI_NUMERICHOST | NI_NUMERICSERV) != 0)
+        continue;
+      out.emplace_back(fd, peer_key(host, std::atoi(service)));
+    }
+    return out;
+  }
+  void watch() {
+    std::unique_lock lock(mutex_);
+    while (!quit_) {
+      wake_.wait_for(lock, kWatchdogPeriod);
+      const auto now = Clock::now();
+      for (auto& [key, c] : connections_) c.seen = false;
+      std::vector<std::pair<Clock::time_point, int>> reading;  // (since, fd)
+      for (const auto& [fd, key] : scan()) {
+        Connection& c = connections_[key];  // new: reading since now
+        c.seen = true;
+        if (stopping_ || (c.reading && now - c.reading_since > kRequestReadLimit)) ::shutdown(fd, SHUT_RDWR);
+        else if (c.reading) reading.emplace_back(c.reading_since, fd);
+      }
+      std::erase_if(connections_, [](const auto& entry) { return !entry.second.seen; });
+      if (reading.size() <= kMaxReadingConnections) continue;
+      std::sort(reading.begin(), reading.end());
+      for (size_t k = 0; k + kMaxReadingConnections < reading.size(); ++k) ::shutdown(reading[k].second, SHUT_RDWR);
+    }
+  }
+
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::map<std::string, Connection> connections_;
+  int port_ = 0;
+  bool stopping_ = false, quit_ = false;
+  std::thread watchdog_;
+};
+
+
+ViewerServer::ViewerServer(const std::string& host, int port)
+    : guard_(std::make_unique<ConnectionGuard>()), server_(std::make_unique<httplib::Server>()), host_(host) {
+  httplib::Server& server = *server_;
+  server.new_task_queue = [] { return new httplib::ThreadPool(kServerThreads); };
+  server.set_read_timeout(kReadTimeoutS, 0);
+  server.set_write_timeout(10, 0);
+  server.set_keep_alive_timeout(kReadTimeoutS);
+  server.set_keep_alive_max_count(kKeepAliveMaxRequests);
+  server.set_payload_max_length(1 << 16);  // GET only: no request body worth reading
+  server.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
+    guard_->request_read(req.remote_addr, req.remote_port);
+    // A body would be read after this point, outside the request time limit: GET has none.
+    const bool has_body = (req.has_header("Content-Length") && req.get_header_value("Content-Length") != "0") ||
+                          req.has_header("Transfer-Encoding");
+    if (has_body) {
+      res.status = 400;
+      res.set_header("Connection", "close");
+      res.set_content("a request body is not accepted\n", "text/plain");
+      return httplib::Server::HandlerResponse::Handled;
+    }
+    return httplib::Server::HandlerResponse::Unhandled;
+  });
+  server.set_logger([this](const httplib::Request& req, const httplib::Response&) {
+    guard_->response_sent(req.remote_addr, req.remote_port);
+  });
   // Outputs change between runs (and a live map every second): never show a stale one.
-  server_.set_post_routing_handler([](const httplib::Request&, httplib::Response& res) {
+  server.set_post_routing_handler([](const httplib::Request&, httplib::Response& res) {
     res.set_header("Cache-Control", "no-store");
   });
-  server_.Get("/", [](const httplib::Request&, httplib::Response& res) { res.set_redirect("/viewer/index.html"); });
+  server.Get("/", [](const httplib::Request&, httplib::Response& res) { res.set_redirect("/viewer/index.html"); });
   if (port == 0) {
-    port_ = server_.bind_to_any_port(host);
+    port_ = server.bind_to_any_port(host);
     if (port_ <= 0) throw Error("--host", "cannot listen on " + host);
-  } else if (!server_.bind_to_port(host, port)) {
+  } else if (!server.bind_to_port(host, port)) {
     throw Error("--port", "cannot listen on " + host + ":" + std::to_string(port) + " (in use?)");
   } else {
     port_ = port;
   }
+  guard_->watch_port(port_);
 }
 
 ViewerServer::~ViewerServer() { stop(); }
+
+httplib::Server& ViewerServer::http() { return *server_; }
 
 void ViewerServer::print_urls(const std::string& what) const {
   std::printf("%s\n", what.c_str());
@@ -196,20 +336,22 @@ void ViewerServer::run_until_interrupted() {
   std::atomic<bool> listening_done{false};
   std::thread watcher([&] {
     while (interrupt_signal() == 0 && !listening_done) std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    server_.stop();
+    guard_->stop_all();
+    server_->stop();
   });
-  const bool ok = server_.listen_after_bind();
+  const bool ok = server_->listen_after_bind();
   listening_done = true;
   watcher.join();
   if (!ok && interrupt_signal() == 0) throw Error("semap view", "the server stopped unexpectedly");
 }
 
 void ViewerServer::start() {
-  thread_ = std::thread([this] { server_.listen_after_bind(); });
+  thread_ = std::thread([this] { server_->listen_after_bind(); });
 }
 
 void ViewerServer::stop() {
-  server_.stop();
+  guard_->stop_all();
+  server_->stop();
   if (thread_.joinable()) thread_.join();
 }
 #endif

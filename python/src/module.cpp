@@ -3,8 +3,11 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <yaml-cpp/exceptions.h>
+
 #include <filesystem>
 #include <fstream>
+#include <new>
 #include <optional>
 
 #include "bindings.hpp"
@@ -100,7 +103,28 @@ PYBIND11_MODULE(_semap, m) {
   m.attr("__version__") = SEMAP_VERSION;
   // Every semap::Error (bad file, bad config key, bad camera, add_frame after finish) is a
   // semap.Error, a ValueError.
-  py::register_exception<semap::Error>(m, "Error", PyExc_ValueError);
+  // Issue 44, class 5: no other C++ exception reaches Python as a raw RuntimeError (yaml-cpp or
+  // standard-library text): they become semap.Error too. Registered first, so tried last (pybind11
+  // tries translators newest first): semap::Error and pybind11's own errors keep their types.
+  static PyObject* semap_error_type = nullptr;
+  py::register_exception_translator([](std::exception_ptr thrown) {
+    try {
+      if (thrown) std::rethrow_exception(thrown);
+    } catch (const py::error_already_set&) {
+      throw;
+    } catch (const py::builtin_exception&) {
+      throw;
+    } catch (const semap::Error&) {
+      throw;
+    } catch (const std::bad_alloc&) {
+      PyErr_SetString(semap_error_type, "out of memory");
+    } catch (const YAML::Exception& e) {
+      PyErr_SetString(semap_error_type, ("config: malformed YAML: " + e.msg).c_str());
+    } catch (const std::exception& e) {
+      PyErr_SetString(semap_error_type, e.what());
+    }
+  });
+  semap_error_type = py::register_exception<semap::Error>(m, "Error", PyExc_ValueError).ptr();
   bind_types(m);
   bind_mapper(m);
   bind_dataset(m);

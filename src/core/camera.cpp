@@ -1,8 +1,10 @@
 #include "semap/core/camera.hpp"
 
 #include <cmath>
+#include <cstdio>
 
 #include "semap/core/error.hpp"
+#include "core/camera_difference.hpp"
 
 namespace semap {
 
@@ -73,6 +75,37 @@ PinholeIntrinsics PinholeIntrinsics::scaled(double factor) const {
   s.width = static_cast<int>(width * factor + 0.5);
   s.height = static_cast<int>(height * factor + 0.5);
   return s;
+}
+
+namespace {
+std::string exact(double v) {
+  char text[40];
+  std::snprintf(text, sizeof text, "%.17g", v);
+  return text;
+}
+void add_difference(std::string& out, const char* name, double given, double expected) {
+  if (given == expected || (std::isnan(given) && std::isnan(expected))) return;
+  out += (out.empty() ? "" : ", ") + std::string(name) + " " + exact(given) + " vs " + exact(expected);
+}
+}  // namespace
+
+std::string describe_camera_difference(const PinholeIntrinsics& given, const PinholeIntrinsics& expected) {
+  std::string out;
+  if (given.width != expected.width || given.height != expected.height)
+    out += "size " + std::to_string(given.width) + "x" + std::to_string(given.height) + " vs " +
+           std::to_string(expected.width) + "x" + std::to_string(expected.height);
+  add_difference(out, "fx", given.fx, expected.fx);
+  add_difference(out, "fy", given.fy, expected.fy);
+  add_difference(out, "cx", given.cx, expected.cx);
+  add_difference(out, "cy", given.cy, expected.cy);
+  return out;
+}
+
+std::string describe_camera_difference(const CameraModel& given, const CameraModel& expected) {
+  std::string out = describe_camera_difference(given.depth, expected.depth);
+  static constexpr const char* kNames[5] = {"k1", "k2", "p1", "p2", "k3"};
+  for (size_t k = 0; k < 5; ++k) add_difference(out, kNames[k], given.distortion[k], expected.distortion[k]);
+  return out;
 }
 
 }  // namespace semap

@@ -2,8 +2,12 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+#include <array>
+#include <bit>
 #include <cmath>
 #include <nanoflann.hpp>
+#include <numeric>
 
 namespace semap::eval_detail {
 
@@ -17,16 +21,40 @@ struct CloudAdaptor {
 };
 using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, CloudAdaptor>,
                                                    CloudAdaptor, 3, size_t>;
+
+/// Bit pattern of a point: a total order (NaN included) under which equal coordinates compare equal.
+std::array<uint32_t, 3> bits_of(const Eigen::Vector3f& p) {
+  return {std::bit_cast<uint32_t>(p.x()), std::bit_cast<uint32_t>(p.y()), std::bit_cast<uint32_t>(p.z())};
+}
 }  // namespace
 
 struct NearestNeighborIndex::Impl {
+  std::vector<Eigen::Vector3f> unique_points;  ///< the input without repeats, when it has any
+  std::vector<size_t> original_index;          ///< unique point -> lowest input index (empty: identity)
   CloudAdaptor adaptor;
   std::unique_ptr<KdTree> tree;
 };
 
+// The tree holds each distinct point once: nanoflann visits every leaf whose distance ties the
+// best one, so N copies of one point made each query O(N) and a search O(N^2) (issue 44, class 7:
+// 1M identical vertices took minutes). Deduplication is a sort, O(N log N).
 NearestNeighborIndex::NearestNeighborIndex(const std::vector<Eigen::Vector3f>& points)
     : impl_(std::make_unique<Impl>()) {
-  impl_->adaptor.points = &points;
+  std::vector<size_t> order(points.size());
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return bits_of(points[a]) < bits_of(points[b]); });
+  for (size_t k = 0; k < order.size(); ++k)
+    if (k == 0 || bits_of(points[order[k]]) != bits_of(points[order[k - 1]]))
+      impl_->original_index.push_back(order[k]);  // stable sort: the first of equal points
+  if (impl_->original_index.size() == points.size()) {
+    std::vector<size_t>().swap(impl_->original_index);  // no repeats: the tree indexes `points` itself
+    impl_->adaptor.points = &points;
+  } else {
+    impl_->unique_points.reserve(impl_->original_index.size());
+    for (size_t i : impl_->original_index) impl_->unique_points.push_back(points[i]);
+    impl_->adaptor.points = &impl_->unique_points;
+  }
   if (!points.empty())
     impl_->tree = std::make_unique<KdTree>(3, impl_->adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
 }
@@ -39,7 +67,7 @@ NearestNeighborIndex::Hit NearestNeighborIndex::nearest(const Eigen::Vector3f& q
   size_t index = 0;
   float distance_sq = 0.0f;
   if (impl_->tree->knnSearch(query.data(), 1, &index, &distance_sq) == 1) {
-    hit.index = index;
+    hit.index = impl_->original_index.empty() ? index : impl_->original_index[index];
     hit.distance = std::sqrt(distance_sq);
   }
   return hit;

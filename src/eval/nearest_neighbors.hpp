@@ -10,7 +10,9 @@ namespace semap::eval_detail {
 
 class NearestNeighborIndex {
  public:
-  /// Keeps a reference to `points`: they must outlive the index.
+  /// Keeps a reference to `points`: they must outlive the index. Repeated points are indexed
+  /// once (a copy of the distinct ones, only when there are repeats); a hit names the lowest
+  /// index holding its point. O(N log N). Queries are thread-safe (const).
   explicit NearestNeighborIndex(const std::vector<Eigen::Vector3f>& points);
   ~NearestNeighborIndex();
   NearestNeighborIndex(const NearestNeighborIndex&) = delete;

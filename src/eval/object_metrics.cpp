@@ -19,6 +19,11 @@ namespace {
 
 using VoxelSet = std::vector<uint64_t>;  // sorted, unique packed voxel keys
 
+/// Surface samples all ground-truth boxes of a scene.json may make together (12 bytes each,
+/// ~0.5 GB with their k-d trees): a file of thousands of large boxes is refused, not sampled into
+/// gigabytes (issue 44, class 2; README, reliability).
+constexpr size_t kMaxGtSamplePoints = 20'000'000;
+
 // Origin of the evaluation grid, in voxels. Not 0 (nor any simple fraction): synthetic and built
 // scenes put faces at round coordinates, and a face on a cell border splits between two voxel
 // layers by float rounding, so a perfect map of it scored IoU ~0.5 (test
@@ -120,21 +125,30 @@ struct IndexedObjects {
   }
 };
 
-/// Precision and recall of every (GT, map) pair at distance d (header), row-major by GT; pairs
-/// whose boxes are farther apart than d are disjoint and not searched. Non-finite map points
-/// count against precision.
-std::vector<SurfaceOverlap> surface_overlaps(const std::vector<EvalObject>& gt, const std::vector<EvalObject>& map,
-                                             float distance) {
+/// A (GT, map) pair whose surfaces overlap (recall > 0).
+struct PairOverlap {
+  size_t gt = 0, map = 0;
+  SurfaceOverlap overlap;
+};
+
+/// Precision and recall at distance d (header) of the (GT, map) pairs that overlap, sorted by GT
+/// then map index; pairs whose boxes are farther apart than d are disjoint and not searched.
+/// Sparse: a dense GT x map table of a few thousand objects each took gigabytes (issue 44,
+/// class 2). Non-finite map points count against precision.
+std::vector<PairOverlap> surface_overlaps(const std::vector<EvalObject>& gt, const std::vector<EvalObject>& map,
+                                          float distance) {
   const IndexedObjects g(gt), m(map);
-  std::vector<SurfaceOverlap> overlaps(gt.size() * map.size());
+  std::vector<PairOverlap> overlaps;
   for (size_t i = 0; i < gt.size(); ++i)
     for (size_t j = 0; j < map.size(); ++j) {
       if (!within(g.bounds[i], m.bounds[j], distance)) continue;
-      auto& o = overlaps[i * map.size() + j];
+      SurfaceOverlap o;
       o.recall = fraction_within(*m.index[j], g.points[i], distance);
-      if (o.recall > 0.0 && !map[j].points.empty())
+      if (o.recall <= 0.0) continue;
+      if (!map[j].points.empty())
         o.precision = fraction_within(*g.index[i], m.points[j], distance) *
                       static_cast<double>(m.points[j].size()) / static_cast<double>(map[j].points.size());
+      overlaps.push_back({i, j, o});
     }
   return overlaps;
 }
@@ -153,13 +167,13 @@ std::vector<ObjectClassCount> count_per_class(const std::vector<EvalObject>& gt,
 
 /// Greedy one-to-one same-class matching by descending IoU, per threshold (header).
 std::vector<ObjectMatchStats> match_instances(const std::vector<EvalObject>& gt, const std::vector<EvalObject>& map,
-                                              const std::vector<double>& ious, const std::vector<double>& thresholds) {
+                                              const std::vector<PairOverlap>& overlaps,
+                                              const std::vector<double>& thresholds) {
   struct Candidate { double iou; size_t i, j; };
   std::vector<Candidate> candidates;
-  for (size_t i = 0; i < gt.size(); ++i)
-    for (size_t j = 0; j < map.size(); ++j)
-      if (gt[i].class_id == map[j].class_id && ious[i * map.size() + j] > 0.0)
-        candidates.push_back({ious[i * map.size() + j], i, j});
+  for (const PairOverlap& p : overlaps)
+    if (const double v = p.overlap.iou(); gt[p.gt].class_id == map[p.map].class_id && v > 0.0)
+      candidates.push_back({v, p.gt, p.map});
   std::stable_sort(candidates.begin(), candidates.end(),
                    [](const Candidate& a, const Candidate& b) { return a.iou > b.iou; });
   std::vector<ObjectMatchStats> out;
@@ -262,25 +276,25 @@ ObjectEvaluation evaluate_objects(const std::vector<EvalObject>& gt, const std::
   for (const auto& g : gt) gt_voxels.push_back(voxelize(g.points, options.voxel_size_m));
   for (const auto& m : map) map_voxels.push_back(voxelize(m.points, options.voxel_size_m));
   const auto overlaps = surface_overlaps(gt, map, static_cast<float>(options.match_distance_m));
-  std::vector<double> ious(overlaps.size());
-  for (size_t k = 0; k < overlaps.size(); ++k) ious[k] = overlaps[k].iou();
 
   // METHODS.md C6: WOv weighted by GT surface area (occupied voxels).
   double weight_sum = 0.0, wov_sum = 0.0, wov_same_sum = 0.0, wov_voxel_sum = 0.0;
+  auto pair = overlaps.begin();  // sorted by GT index
   for (size_t i = 0; i < gt.size(); ++i) {
     GtObjectScore score{.gt_id = gt[i].id, .class_id = gt[i].class_id, .voxels = gt_voxels[i].size()};
-    double best_voxel_iou = 0.0;
-    for (size_t j = 0; j < map.size(); ++j) {
-      const double v = ious[i * map.size() + j];
+    for (; pair != overlaps.end() && pair->gt == i; ++pair) {
+      const size_t j = pair->map;
+      const double v = pair->overlap.iou();
       if (v > score.best_iou) {
         score.best_iou = v;
         score.best_map_id = map[j].id;
-        score.best_precision = overlaps[i * map.size() + j].precision;
-        score.best_recall = overlaps[i * map.size() + j].recall;
+        score.best_precision = pair->overlap.precision;
+        score.best_recall = pair->overlap.recall;
       }
       if (map[j].class_id == gt[i].class_id) score.best_iou_same_class = std::max(score.best_iou_same_class, v);
-      best_voxel_iou = std::max(best_voxel_iou, iou(gt_voxels[i], map_voxels[j]));
     }
+    double best_voxel_iou = 0.0;
+    for (size_t j = 0; j < map.size(); ++j) best_voxel_iou = std::max(best_voxel_iou, iou(gt_voxels[i], map_voxels[j]));
     const double w = static_cast<double>(score.voxels);
     weight_sum += w;
     wov_sum += w * score.best_iou;
@@ -293,7 +307,7 @@ ObjectEvaluation evaluate_objects(const std::vector<EvalObject>& gt, const std::
     result.wov_same_class = wov_same_sum / weight_sum;
     result.wov_voxel = wov_voxel_sum / weight_sum;
   }
-  result.matches = match_instances(gt, map, ious, options.iou_thresholds);
+  result.matches = match_instances(gt, map, overlaps, options.iou_thresholds);
   return result;
 }
 
@@ -329,7 +343,7 @@ std::vector<EvalObject> gt_objects_from_scene_json(const std::filesystem::path& 
   const nlohmann::json scene = read_json(path);
   if (!scene.contains("objects") || !scene["objects"].is_array()) throw Error(path, "no \"objects\" array");
   std::vector<EvalObject> out;
-  size_t k = 0;
+  size_t k = 0, total_points = 0;
   for (const auto& jo : scene["objects"]) {
     try {
       EvalObject o;
@@ -340,10 +354,15 @@ std::vector<EvalObject> gt_objects_from_scene_json(const std::filesystem::path& 
       } else {
         sample_box_surface(jo.at("obb"), spacing, o.points);
       }
+      total_points += o.points.size();
       out.push_back(std::move(o));
     } catch (const std::exception& e) {
       throw Error(path, "object " + std::to_string(k) + ": " + e.what());
     }
+    if (total_points > kMaxGtSamplePoints)
+      throw Error(path, "the objects up to object " + std::to_string(k) + " sample to more than " +
+                            std::to_string(kMaxGtSamplePoints) + " surface points at " + compact_number(spacing) +
+                            " m spacing (limit); evaluate fewer or smaller objects, or a larger --voxel");
     ++k;
   }
   require_unique_ids(out, path, "instance_id");

@@ -5,6 +5,7 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <optional>
 #include <string>
@@ -60,6 +61,14 @@ size_t scalar_size(Scalar s) {
 
 /// Clamps into [0, hi]; NaN/Inf from a corrupt file become 0 (casting them is undefined).
 double clamp_finite(double v, double hi) { return std::isfinite(v) ? std::clamp(v, 0.0, hi) : 0.0; }
+
+/// A label value as read, for an error message: integers without a fraction, others as %g.
+std::string format_label_value(double v) {
+  if (std::isfinite(v) && v == std::floor(v) && std::fabs(v) < 1e15) return std::to_string(static_cast<int64_t>(v));
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", v);
+  return text;
+}
 
 bool is_integer(Scalar s) { return s != Scalar::kFloat32 && s != Scalar::kFloat64; }
 
@@ -364,7 +373,14 @@ TriangleMesh parse_ply(const std::string& bytes, const std::string& path) {
         cloud.normals[i] = {static_cast<float>(values[nrm[0]]), static_cast<float>(values[nrm[1]]),
                             static_cast<float>(values[nrm[2]])};
       if (cloud.has_colours()) cloud.colours[i] = {to_u8(rgb[0]), to_u8(rgb[1]), to_u8(rgb[2])};
-      if (cloud.has_labels()) cloud.labels[i] = static_cast<ClassId>(clamp_finite(values[label], 255.0));
+      if (cloud.has_labels()) {
+        // A label a ClassId cannot hold is an error, not a silent 255 (issue 44, class 8).
+        const double v = values[label];
+        if (!(v >= 0.0 && v <= 255.0 && v == std::floor(v)))
+          throw Error(path, "vertex " + std::to_string(i) + ": label " + format_label_value(v) +
+                                " is not a class id (0..255)");
+        cloud.labels[i] = static_cast<ClassId>(v);
+      }
       if (cloud.has_instances()) cloud.instances[i] = static_cast<uint32_t>(clamp_finite(values[instance], 4294967295.0));
     }
   }

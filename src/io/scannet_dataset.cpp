@@ -9,6 +9,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cctype>
 #include <cmath>
 #include <cstring>
@@ -82,7 +83,10 @@ std::vector<std::pair<long, fs::path>> numbered_colour_images(const fs::path& di
     const std::string stem = it->path().stem().string(), ext = it->path().extension().string();
     if (ext != ".jpg" && ext != ".png") continue;
     if (stem.empty() || !std::all_of(stem.begin(), stem.end(), [](unsigned char c) { return std::isdigit(c); })) continue;
-    out.emplace_back(std::stol(stem), it->path());
+    long number = 0;  // not std::stol: its out_of_range said only "stol" (issue 44, class 8)
+    if (std::from_chars(stem.data(), stem.data() + stem.size(), number).ec != std::errc())
+      throw Error(it->path(), "frame number " + stem + " is out of range");
+    out.emplace_back(number, it->path());
   }
   if (ec) throw Error(dir, "cannot list folder: " + ec.message());
   std::sort(out.begin(), out.end());

@@ -1,5 +1,6 @@
 #include "semap/io/trajectory_io.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -12,6 +13,10 @@ namespace semap {
 namespace {
 // Quaternions further than this from unit norm are rejected, nearer ones are normalised.
 constexpr double kQuaternionNormTolerance = 1e-3;
+// Positions beyond this are refused: past float range they became "pose is not finite" deep in
+// the pipeline, without the file's name (issue 44, class 8). 1e9 m leaves room for any
+// georeferenced (UTM, ECEF) trajectory. README, reliability.
+constexpr double kMaxPositionM = 1e9;
 }  // namespace
 
 Trajectory parse_tum_trajectory(const std::string& text, const std::string& source) {
@@ -30,6 +35,8 @@ Trajectory parse_tum_trajectory(const std::string& text, const std::string& sour
       if (!std::isfinite(*value)) throw Error(where(source, line_no), "NaN or Inf value");
       v[k] = *value;
     }
+    if (std::max({std::abs(v[1]), std::abs(v[2]), std::abs(v[3])}) > kMaxPositionM)
+      throw Error(where(source, line_no), "position beyond +-1e9 m");
     const Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);  // Eigen takes (w, x, y, z)
     if (std::abs(q.norm() - 1.0) > kQuaternionNormTolerance)
       throw Error(where(source, line_no), "quaternion is not unit (norm " + std::to_string(q.norm()) + ")");

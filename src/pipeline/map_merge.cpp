@@ -3,6 +3,7 @@
 #include <chrono>
 #include <set>
 
+#include "core/camera_difference.hpp"
 #include "core/archive.hpp"
 #include "core/paths.hpp"
 #include "io/output_folder.hpp"
@@ -48,10 +49,8 @@ SavedMap read_saved_map(const fs::path& path) {
 void require_mergeable(const SavedMap& a, const SavedMap& b) {
   if (!(a.camera.depth == b.camera.depth) || a.camera.distortion != b.camera.distortion)
     throw Error(b.path, "was made with another depth camera than " + a.path.string() + " (" +
-                            std::to_string(b.camera.depth.width) + "x" + std::to_string(b.camera.depth.height) +
-                            " vs " + std::to_string(a.camera.depth.width) + "x" +
-                            std::to_string(a.camera.depth.height) + " or other intrinsics): keyframes compare only "
-                            "within one camera");
+                            describe_camera_difference(b.camera, a.camera) +
+                            "): keyframes compare only within one camera");
   require_same_ferns(a.config.tracking, b.config.tracking, b.path);
   require_same_voxel_layout(a.config.tsdf, b.config.tsdf, b.path.string());
 }

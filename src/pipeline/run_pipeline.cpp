@@ -1,5 +1,6 @@
 #include "semap/pipeline/run_pipeline.hpp"
 
+#include "core/camera_difference.hpp"
 #include "pipeline/map_archive.hpp"
 
 #include <spdlog/spdlog.h>
@@ -288,10 +289,8 @@ std::unique_ptr<Mapper> make_run_mapper(const RunOptions& options, const SemapCo
   auto mapper = Mapper::load(path, mapper_config, std::move(segmenter));
   const PinholeIntrinsics &saved = mapper->camera().depth, &given = source.camera().depth;
   if (!(saved == given))
-    throw Error(options.dataset, "its depth camera (" + std::to_string(given.width) + "x" + std::to_string(given.height) +
-                                     ", fx " + std::to_string(given.fx) + ") is not the one of the saved map " +
-                                     path.string() + " (" + std::to_string(saved.width) + "x" +
-                                     std::to_string(saved.height) + ", fx " + std::to_string(saved.fx) + ")");
+    throw Error(options.dataset, "its depth camera is not the one of the saved map " + path.string() + " (" +
+                                     describe_camera_difference(given, saved) + ")");
   if (options.show_progress)
     std::fprintf(stderr, "semap run: continuing %s (%zu keyframes, %zu objects): relocalising the first frames into it\n",
                  path.string().c_str(), mapper->stats().resumed_keyframes, mapper->stats().objects);

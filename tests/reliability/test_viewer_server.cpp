@@ -8,7 +8,10 @@
 #include <sys/socket.h>
 #include <sys/stat.h>
 
+#include <atomic>
+#include <cerrno>
 #include <chrono>
+#include <mutex>
 #include <filesystem>
 #include <regex>
 
@@ -199,6 +202,79 @@ TEST_F(ViewerServer, AllInterfacesWarnAndPrintUsableUrls) {
   EXPECT_EQ(http_get(port_, "/viewer/index.html").status, 200);
   EXPECT_EQ(stop(), 0);
   EXPECT_NE(slurp(log_).find("semap view: stopped"), std::string::npos);
+}
+
+// Issue 44, class 6: connections that each send one header line at a time never complete a
+// request: they must not stall other requests, must be cut once the whole-request time limit
+// (5 s) has passed although they never go idle, and Ctrl-C must not wait for them.
+TEST_F(ViewerServer, SlowClientsCannotHoldRequestsOrShutdown) {
+  START_OR_SKIP();
+  std::vector<int> slow;
+  for (int k = 0; k < 40; ++k) {
+    slow.push_back(connect_to(port_));
+    ASSERT_GE(slow.back(), 0);
+  }
+  const auto opened = std::chrono::steady_clock::now();
+  std::atomic<bool> done{false};
+  std::mutex fds_mutex;
+  std::thread trickle([&] {
+    for (int line = 0; !done; ++line) {
+      {
+        std::lock_guard lock(fds_mutex);
+        for (int fd : slow) {
+          const std::string text = line == 0 ? "GET /mesh.ply HTTP/1.1\r\n" : "X-Slow-" + std::to_string(line) + ": 1\r\n";
+          (void)!::send(fd, text.data(), text.size(), MSG_NOSIGNAL);
+        }
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(400));
+    }
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  for (int k = 0; k < 5; ++k) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto r = http_get(port_, "/viewer/viewer.json");
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    EXPECT_EQ(r.status, 200);
+    EXPECT_LT(s, 1.5) << "request " << k << " waited behind slow clients";
+  }
+  // Every slow connection is closed by the server within the limit (+ slack), though it never idles.
+  size_t closed = 0;
+  {
+    std::lock_guard lock(fds_mutex);
+    for (int fd : slow) {
+      timeval timeout{0, 100'000};
+      ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
+    }
+  }
+  std::vector<bool> is_closed(slow.size(), false);
+  while (closed < slow.size() && std::chrono::steady_clock::now() - opened < std::chrono::seconds(9)) {
+    for (size_t k = 0; k < slow.size(); ++k) {
+      if (is_closed[k]) continue;
+      char buffer[4096];
+      const ssize_t n = ::recv(slow[k], buffer, sizeof buffer, MSG_DONTWAIT);
+      if (n == 0 || (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK)) is_closed[k] = true, ++closed;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  EXPECT_EQ(closed, slow.size()) << "slow connections still open after 9 s";
+  // New slow clients, then Ctrl-C: the server stops at once instead of waiting for them.
+  {
+    std::lock_guard lock(fds_mutex);
+    for (int fd : slow) ::close(fd);
+    slow.clear();
+    for (int k = 0; k < 20; ++k) slow.push_back(connect_to(port_));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  const auto t0 = std::chrono::steady_clock::now();
+  ::kill(pid_, SIGINT);
+  const int code = test::wait_exit(pid_, 20);
+  pid_ = -1;
+  const double stop_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  done = true;
+  trickle.join();
+  for (int fd : slow) ::close(fd);
+  EXPECT_EQ(code, 0);
+  EXPECT_LT(stop_s, 2.0) << "Ctrl-C waited for slow clients";
 }
 
 }  // namespace
