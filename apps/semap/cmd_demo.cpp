@@ -43,6 +43,7 @@ void add_demo_command(CLI::App& app, CommandRunner& run) {
       RunOptions options;
       options.dataset = dataset;
       options.out_dir = args->out;
+      options.dataset_inside_out_dir = true;  // OUT/dataset: generated just above
       options.poses = PoseSource::track;
       options.segmenter = "groundtruth";
       options.seg_noise = args->seg_noise;

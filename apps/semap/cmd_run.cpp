@@ -75,6 +75,9 @@ void add_run_command(CLI::App& app, CommandRunner& run) {
     run = [args]() -> int {
       SemapConfig config = load_semap_config(args->config_path);
       if (args->voxel > 0) config.tsdf.voxel_size = args->voxel;
+      if (args->voxel > 0 && !args->options.resume_from.empty())  // issue 44: not silently ignored
+        std::fprintf(stderr, "semap run: warning: --voxel %g ignored: --resume continues the saved map at its own voxel size\n",
+                     args->voxel);
       if (args->threads > 0) config.pipeline.threads = args->threads;
       config.validate();
       args->options.max_frames = static_cast<size_t>(args->max_frames);

@@ -52,7 +52,8 @@ void add_segment_command(CLI::App& app, CommandRunner& run) {
       auto segmenter = make_segmenter(opts->model, config.segmentation, CameraModel{});
       if (!segmenter) throw Error("--model", "'" + opts->model + "' gives no segmenter");
       // Staged and published at the end (io/output_folder.hpp); earlier calls' outputs stay.
-      OutputFolder out(opts->out, {.tool = "segment", .refuse_foreign_non_empty = false, .remove_stale = false, .publish_last = {}});
+      OutputFolder out(opts->out, {.tool = "segment", .refuse_foreign_non_empty = false, .remove_stale = false, .publish_last = {},
+                                   .inputs = {}});
       for (size_t i = 0; i < opts->images.size(); ++i) {
         throw_if_interrupted();
         const std::filesystem::path path = opts->images[i];

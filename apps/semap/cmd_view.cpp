@@ -69,7 +69,7 @@ fs::path write_viewer(const fs::path& dir) {
     throw Error("semap view", "the browser viewer was not built into this binary: " +
                                   std::string(viewer::unavailable_reason()));
   }
-  OutputFolder out(dir, {.tool = "view", .refuse_foreign_non_empty = false, .remove_stale = true, .publish_last = {}});
+  OutputFolder out(dir, {.tool = "view", .refuse_foreign_non_empty = false, .remove_stale = true, .publish_last = {}, .inputs = {}});
   for (const auto& asset : assets)
     write_file_atomic(out.path(fs::path("viewer") / std::string(asset.name)), std::string(asset.bytes));
   write_file_atomic(out.path("viewer/classes.json"), classes_json());

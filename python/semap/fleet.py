@@ -16,6 +16,12 @@ Without --scheduler a LocalCluster with one single-threaded worker process per c
 same code. Faults: a worker that dies mid-task is replaced by the scheduler (its task runs again
 elsewhere); a recording that fails with a semap error is reported with that error and the
 others still merge.
+
+Outputs never replace files the fleet did not write (issue 44): OUT may not be nor contain a
+recording; OUT/.fleet (the merges' work folder) is removed only when it carries the fleet's
+marker, and OUT/fleet.json is replaced only when an earlier fleet run wrote it. Each
+OUT/<name>/ goes through semap.run's own output-folder rule. The LocalCluster and its dashboard
+listen on 127.0.0.1 only; give --scheduler to use other machines.
 """
 
 import argparse
@@ -27,6 +33,8 @@ import sys
 import time
 
 _TRAJECTORY_SUFFIX = ".trajectory.txt"
+_WORK_MARKER = ".semap-fleet-work"  # in OUT/.fleet: the fleet made this folder, may remove it
+_FLEET_KEY = "semap_fleet"  # in OUT/fleet.json: written by the fleet, may be replaced
 
 
 # --- tasks (run on the workers) ------------------------------------------------------------
@@ -175,13 +183,54 @@ def publish_component(component, out, target):
     shutil.rmtree(old, ignore_errors=True)
 
 
+def output_problem(out, datasets):
+    """Why OUT cannot take the fleet's outputs (a line), or None: OUT is or contains a
+    recording, or holds a .fleet / fleet.json the fleet did not write."""
+    out_r = out.resolve()
+    for d in datasets:
+        d_r = pathlib.Path(d).resolve()
+        if d_r == out_r:
+            return "%s is the recording %s itself: give another --out" % (out, d)
+        if out_r in d_r.parents:
+            return "%s contains the recording %s: give an --out outside the recordings" % (out, d)
+    work = out / ".fleet"
+    if (work.exists() or work.is_symlink()) and not (work.is_dir() and not work.is_symlink()
+                                                     and (work / _WORK_MARKER).is_file()):
+        return "%s exists and was not made by semap.fleet: refusing to remove it" % work
+    summary = out / "fleet.json"
+    if summary.exists() or summary.is_symlink():
+        try:
+            written_by_fleet = not summary.is_symlink() and _FLEET_KEY in json.loads(summary.read_text())
+        except (OSError, ValueError, TypeError):
+            written_by_fleet = False
+        if not written_by_fleet:
+            return "%s exists and was not written by semap.fleet: refusing to replace it" % summary
+    return None
+
+
+def make_work_folder(out):
+    """OUT/.fleet, fresh, with the marker that lets a later run remove it."""
+    work = out / ".fleet"
+    if (work / _WORK_MARKER).is_file():
+        shutil.rmtree(work)
+    work.mkdir()
+    (work / _WORK_MARKER).write_text("semap.fleet work folder (removed when the fleet ends)\n")
+    return work
+
+
+def remove_work_folder(out):
+    work = out / ".fleet"
+    if work.is_dir() and not work.is_symlink() and (work / _WORK_MARKER).is_file():
+        shutil.rmtree(work, ignore_errors=True)
+
+
 def make_client(scheduler, workers):
     from distributed import Client, LocalCluster
 
     if scheduler:
         return Client(scheduler, timeout="30s"), None
     cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                           dashboard_address=":0")
+                           host="127.0.0.1", dashboard_address="127.0.0.1:0")  # issue 44: local only
     return Client(cluster), cluster
 
 
@@ -226,10 +275,15 @@ def main(argv=None):
     out = pathlib.Path(args.out)
     for d in args.datasets:
         if not pathlib.Path(d).exists():
-            print("semap.fleet: error: %s: not found" % d, file=sys.stderr)
+            what = "a dangling symlink" if pathlib.Path(d).is_symlink() else "not found"
+            print("semap.fleet: error: %s: %s" % (d, what), file=sys.stderr)
             return 1
     if args.config and not pathlib.Path(args.config).is_file():
         print("semap.fleet: error: %s: not a file" % args.config, file=sys.stderr)
+        return 1
+    problem = output_problem(out, args.datasets)
+    if problem:
+        print("semap.fleet: error: %s" % problem, file=sys.stderr)
         return 1
     out.mkdir(parents=True, exist_ok=True)
     names = recording_names(args.datasets)
@@ -245,7 +299,7 @@ def main(argv=None):
         if not components:
             print("semap.fleet: error: every recording failed; nothing merged", file=sys.stderr)
             return 1
-        work = out / ".fleet"
+        work = make_work_folder(out)
         components, log = merge_tree(client, components, work, args.retries)
     finally:
         client.close()
@@ -253,9 +307,9 @@ def main(argv=None):
             cluster.close()
     components.sort(key=lambda c: -len(c["recordings"]))
     publish_component(components[0], out, out / "merged")
-    shutil.rmtree(out / ".fleet", ignore_errors=True)
+    remove_work_folder(out)
     merged_recordings = set(components[0]["recordings"]) if len(components[0]["recordings"]) > 1 else set()
-    (out / "fleet.json").write_text(json.dumps({"recordings": names, "mapped": mapped, "failed": failed,
+    (out / "fleet.json").write_text(json.dumps({_FLEET_KEY: 1, "recordings": names, "mapped": mapped, "failed": failed,
                                                 "merges": log, "components": [c["recordings"] for c in components]},
                                                indent=2) + "\n")
     print(summary_table(names, mapped, failed, log, components, merged_recordings, time.monotonic() - t0))

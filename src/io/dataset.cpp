@@ -7,6 +7,7 @@
 
 #include "semap/core/error.hpp"
 #include "core/lens_undistortion.hpp"
+#include "core/paths.hpp"
 #include "io/dataset_layouts.hpp"
 #include "io/image_io.hpp"
 #include "io/rosbag2_bag.hpp"
@@ -65,6 +66,8 @@ std::unique_ptr<DatasetReader> open_file(const fs::path& file, const DatasetOpti
   if (ext == ".bag") return io_detail::open_rosbag(file, options);
   if (ext == ".db3" || ext == ".mcap") return io_detail::open_rosbag2(file, options);
   if (file.filename() == "metadata.yaml") return io_detail::open_rosbag2(file.parent_path(), options);  // a rosbag2 folder's
+  if (ext == ".sens" && (!options.rgb_topic.empty() || !options.depth_topic.empty()))  // issue 44
+    throw Error(file, "--rgb-topic / --depth-topic apply to ROS bags only; this is a ScanNet .sens file");
   if (ext == ".sens") return io_detail::open_scannet_sens(file);
   throw Error(file, "not a folder (expected a dataset folder, a ROS .bag, a rosbag2 .db3 / .mcap or a ScanNet .sens file)");
 }
@@ -160,8 +163,14 @@ std::unique_ptr<DatasetReader> open_dataset(const fs::path& folder, const Datase
   std::error_code ec;
   const std::string ext = lower_extension(root);
   const bool file_format = ext == ".bag" || ext == ".sens" || ext == ".db3" || ext == ".mcap";
-  if (!fs::exists(root, ec)) throw Error(root, file_format ? "file not found" : "dataset folder not found");
+  if (!fs::exists(root, ec)) {  // "a dangling symlink (to X)" is not "not found" (issue 44)
+    const std::string what = describe_path(root);
+    if (what == "not found") throw Error(root, file_format ? "file not found" : "dataset folder not found");
+    throw Error(root, std::string(file_format ? "dataset file" : "dataset folder") + " is " + what);
+  }
   const bool is_folder = fs::is_directory(root, ec);
+  if (is_folder && (ext == ".bag" || ext == ".sens"))  // a folder is reported as one (issue 44)
+    throw Error(root, "is a folder, expected a " + ext + " file");
   if (!is_folder && !fs::is_regular_file(root, ec))
     throw Error(root, "not a folder or a regular file (expected a dataset folder, a .bag or a .sens file)");
   try {
@@ -178,6 +187,8 @@ std::unique_ptr<DatasetReader> open_layout(const fs::path& root, const DatasetOp
   std::optional<io_detail::DatasetYaml> yaml;
   if (fs::exists(root / "dataset.yaml")) yaml = io_detail::read_dataset_yaml(root / "dataset.yaml");
   if (!yaml && io_detail::is_rosbag2_folder(root)) return io_detail::open_rosbag2(root, options);
+  if (!options.rgb_topic.empty() || !options.depth_topic.empty())  // issue 44: never silently ignored
+    throw Error(root, "--rgb-topic / --depth-topic apply to ROS bags only; this is a dataset folder");
   const std::string layout = yaml && !yaml->format.empty() ? yaml->format : detect_layout(root);
   const io_detail::DatasetYaml* y = yaml ? &*yaml : nullptr;
   std::unique_ptr<DatasetReader> reader;

@@ -290,7 +290,46 @@ struct PublishingScope {
   ~PublishingScope() { --g_publishing; }
 };
 
+/// Absolute, with symlinks and ".." resolved as far as the path exists.
+fs::path resolved(const fs::path& p) {
+  std::error_code ec;
+  const fs::path absolute = fs::absolute(p, ec);
+  if (ec) return p.lexically_normal();
+  const fs::path canonical = fs::weakly_canonical(absolute, ec);
+  return ec ? absolute.lexically_normal() : canonical;
+}
+
+/// True when `inner` lies strictly inside `outer` (both resolved), compared part by part.
+bool strictly_inside(const fs::path& inner, const fs::path& outer) {
+  auto i = inner.begin();
+  for (auto o = outer.begin(); o != outer.end(); ++o, ++i) {
+    if (o->empty()) continue;  // a trailing separator
+    if (i == inner.end() || *i != *o) return false;
+  }
+  return i != inner.end() && !i->empty();
+}
+
+bool same_file(const fs::path& a, const fs::path& b) {
+  std::error_code ec;
+  return fs::equivalent(a, b, ec) && !ec;
+}
+
 }  // namespace
+
+// METHODS.md does not cover I/O; issue 44 class 4: an output folder never is or holds an input.
+void refuse_output_over_inputs(const fs::path& out_dir, const std::vector<fs::path>& inputs) {
+  const fs::path out = resolved(out_dir);
+  for (const fs::path& input : inputs) {
+    if (input.empty()) continue;
+    const fs::path in = resolved(input);
+    if (in == out || same_file(input, out_dir))
+      throw Error(out_dir, "is the input " + input.string() +
+                               " itself: refusing to write outputs into it; give another output folder");
+    if (!strictly_inside(in, out)) continue;
+    throw Error(out_dir, "contains the input " + input.string() +
+                             ": refusing to write outputs over it; give a folder outside the inputs");
+  }
+}
 
 // ------------------------------------------------------------------------------ OutputFolder
 
@@ -305,6 +344,7 @@ OutputFolder::OutputFolder(fs::path dir, OutputFolderOptions options) : dir_(std
     return std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_';
   });
   if (!tool_ok) throw Error("OutputFolder", "tool name '" + options_.tool + "' must be letters, digits, - or _");
+  refuse_output_over_inputs(dir_, options_.inputs);
   struct stat st {};
   if (::stat(dir_.c_str(), &st) != 0) {
     if (errno != ENOENT) throw Error(dir_, "output folder is " + describe_path(dir_));
@@ -409,6 +449,21 @@ void move_into_place(int dir_fd, int staging_fd, const std::vector<std::string>&
   }
 }
 
+/// Issue 44: every output whose place in DIR already holds something this tool's manifest or
+/// journal does not list (a user's mesh.ply) stops the publish before anything is moved.
+void refuse_foreign_targets(int dir_fd, const std::vector<std::string>& files, const Manifest& owned, const fs::path& dir,
+                            const std::string& manifest) {
+  for (const auto& rel : files) {
+    if (owned.files.count(rel)) continue;
+    const fs::path p(rel);
+    Fd parent = parent_of_listed(dir_fd, rel);
+    struct stat st {};
+    if (parent.fd < 0 || ::fstatat(parent.fd, p.filename().c_str(), &st, AT_SYMLINK_NOFOLLOW) != 0) continue;
+    throw Error(dir / p, "exists and was not written by semap (not listed in " + manifest +
+                             "): refusing to replace it; move it away or give another output folder");
+  }
+}
+
 /// The previous run's files and folders this run did not write: removed (remove_stale) or
 /// kept and listed again. `manifest` holds this run's entries and receives the kept ones.
 void settle_previous_run(int dir_fd, const Manifest& old, bool remove_stale, Manifest& manifest) {
@@ -441,17 +496,18 @@ std::vector<std::string> OutputFolder::publish() {
   std::vector<std::string> files, dirs;
   walk_staging(staging_fd.fd, "", files, dirs, 0);
   order_for_publish(files, options_.publish_last);
+  const std::string manifest = manifest_name(options_.tool), journal = journal_name(options_.tool);
+  Manifest old = parse_manifest(read_at(dir_fd_, manifest));
+  const Manifest pending = parse_manifest(read_at(dir_fd_, journal));
+  old.files.insert(pending.files.begin(), pending.files.end());
+  old.dirs.insert(pending.dirs.begin(), pending.dirs.end());
+  refuse_foreign_targets(dir_fd_, files, old, dir_, manifest);
   // Every folder of the run first, empty ones too (objects/ of a map without objects): a
   // symlink planted in its place is refused before anything of the old run is touched.
   std::vector<std::string> created_dirs;
   for (const auto& d : dirs) open_chain(dir_fd_, d, dir_, &created_dirs);
 
   // Journal first: everything semap may own in DIR after this point, should we be cut short.
-  const std::string manifest = manifest_name(options_.tool), journal = journal_name(options_.tool);
-  Manifest old = parse_manifest(read_at(dir_fd_, manifest));
-  const Manifest pending = parse_manifest(read_at(dir_fd_, journal));
-  old.files.insert(pending.files.begin(), pending.files.end());
-  old.dirs.insert(pending.dirs.begin(), pending.dirs.end());
   Manifest everything = old;
   everything.files.insert(files.begin(), files.end());
   everything.dirs.insert(dirs.begin(), dirs.end());

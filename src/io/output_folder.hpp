@@ -25,7 +25,12 @@
 //    this object created it and nothing was published;
 //  - a folder created by semap carries the marker DIR/.semap-output; with
 //    `refuse_foreign_non_empty` (semap synth) a non-empty folder without it is refused;
-//  - one OutputFolder per DIR at a time (flock): a second concurrent command fails clearly.
+//  - one OutputFolder per DIR at a time (flock): a second concurrent command fails clearly;
+//  - (issue 44) publish() never replaces a file semap did not write: a file already at an
+//    output's place that this tool's manifest (or journal) does not list - a user's mesh.ply,
+//    a recording's report.json - stops the publish before anything is moved, naming the file;
+//  - (issue 44) DIR may not be, nor contain, one of the command's inputs (`inputs`: dataset,
+//    recording, bag, a map to resume or merge): refused before anything is created.
 //
 // Interruption: InterruptGuard (below) turns the first SIGINT/SIGTERM into a flag the command
 // polls (throw_if_interrupted) so it unwinds and publishes nothing; a second signal unlinks the
@@ -49,7 +54,14 @@ struct OutputFolderOptions {
   /// Relative paths published last, in this order: the files that say "complete" (report.json,
   /// dataset.yaml). The previous run's copies are removed before anything else is published.
   std::vector<std::string> publish_last;
+  /// What the command reads (dataset folders or files, maps). DIR may not be one of them nor
+  /// contain one (see refuse_output_over_inputs). Empty: nothing to check.
+  std::vector<std::filesystem::path> inputs;
 };
+
+/// Throws semap::Error naming `out_dir` when it is one of `inputs` or contains one, symlinks
+/// and ".." resolved (the same folder by another path is the same folder). Thread-safe.
+void refuse_output_over_inputs(const std::filesystem::path& out_dir, const std::vector<std::filesystem::path>& inputs);
 
 class OutputFolder {
  public:

@@ -162,14 +162,14 @@ MapMergeResult merge_map_files(const fs::path& a, const fs::path& b, const fs::p
 }
 
 MapMergeResult merge_maps(const fs::path& a, const fs::path& b, const fs::path& out_dir) {
-  for (const fs::path& input : {a, b}) {
-    if (!fs::exists(input)) throw Error(input, "not found");
-    std::error_code ec;
-    if (fs::equivalent(folder_of(input), out_dir, ec))
-      throw Error(out_dir, "is the folder of the input map " + input.string() +
-                               ": write the merged map elsewhere (inputs are only read)");
-  }
-  OutputFolder out(out_dir, {.tool = "merge", .publish_last = {"report.json"}});
+  for (const fs::path& input : {a, b})
+    if (!fs::exists(input)) throw Error(input, "input map is " + describe_path(input));
+  std::error_code ec;
+  if (fs::equivalent(map_file_of(a), map_file_of(b), ec))
+    throw Error(b, "is the same map as " + a.string() + ": merging a map with itself would duplicate its keyframes");
+  // Never an input map's folder nor a folder holding one (issue 44).
+  const std::vector<fs::path> inputs = {fs::absolute(map_file_of(a)).parent_path(), fs::absolute(map_file_of(b)).parent_path()};
+  OutputFolder out(out_dir, {.tool = "merge", .publish_last = {"report.json"}, .inputs = inputs});
   const fs::path dir = out.staging();
   SemapConfig config;
   MapMergeResult r = merge_files(map_file_of(a), map_file_of(b), dir / "map.semap", config);

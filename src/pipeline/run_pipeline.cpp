@@ -271,11 +271,8 @@ SemapConfig mapper_config_for(const SemapConfig& config, const FrameSource& sour
 
 /// The saved map a run continues (RunOptions::resume_from): a folder's map.semap, or the file.
 std::filesystem::path saved_map_path(const RunOptions& options) {
-  std::error_code ec;
+  // --out being (or holding) the saved map is refused by the OutputFolder (its inputs).
   const std::filesystem::path path = map_file_of(options.resume_from);
-  const std::filesystem::path out = std::filesystem::weakly_canonical(options.out_dir, ec);
-  if (std::filesystem::weakly_canonical(path.parent_path(), ec) == out)
-    throw Error(options.out_dir, "--out is the folder --resume reads: write the continued map to another folder");
   if (options.poses == PoseSource::groundtruth)
     throw Error(path, "--resume relocalises the recording into the saved map: it needs --poses track");
   return path;
@@ -292,8 +289,10 @@ std::unique_ptr<Mapper> make_run_mapper(const RunOptions& options, const SemapCo
     throw Error(options.dataset, "its depth camera is not the one of the saved map " + path.string() + " (" +
                                      describe_camera_difference(given, saved) + ")");
   if (options.show_progress)
-    std::fprintf(stderr, "semap run: continuing %s (%zu keyframes, %zu objects): relocalising the first frames into it\n",
-                 path.string().c_str(), mapper->stats().resumed_keyframes, mapper->stats().objects);
+    std::fprintf(stderr,
+                 "semap run: continuing %s (%zu keyframes, %zu objects, its %g m voxels): relocalising the first frames into it\n",
+                 path.string().c_str(), mapper->stats().resumed_keyframes, mapper->stats().objects,
+                 mapper->config().tsdf.voxel_size);
   return mapper;
 }
 
@@ -381,7 +380,10 @@ RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
   tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, config.pipeline.threads);
   const auto source = open_frame_source(options.dataset.string(), options.dataset_options);
   // Opened before mapping: a folder that cannot take outputs fails now, not after the work.
-  OutputFolder out(options.out_dir, {.tool = "run", .publish_last = {"report.html", "report.json"}});
+  // Never the dataset or the map to resume, nor a folder holding one (issue 44).
+  std::vector<std::filesystem::path> inputs = {options.resume_from};
+  if (!options.dataset_inside_out_dir) inputs.push_back(options.dataset);
+  OutputFolder out(options.out_dir, {.tool = "run", .publish_last = {"report.html", "report.json"}, .inputs = inputs});
   const DatasetReader* dataset = source->dataset();
   if (dataset && dataset->size() == 0) throw Error(options.dataset, "dataset has no frames");
   const bool poses_given = options.poses == PoseSource::groundtruth;

@@ -103,7 +103,7 @@ SynthStats generate_dataset(const SynthConfig& cfg, const fs::path& out_dir) {
   // folder of someone else's data. Everything is staged inside it and published at the end;
   // files of an earlier, larger dataset there are removed, nothing else is.
   OutputFolder folder(out_dir, {.tool = "synth", .refuse_foreign_non_empty = true, .remove_stale = true,
-                                .publish_last = {"dataset.yaml"}});
+                                .publish_last = {"dataset.yaml"}, .inputs = {}});
   const fs::path tmp = folder.staging();
   const bool noisy_seg = cfg.seg_noise > 0;
   for (const char* sub : {"rgb", "depth", "label", "instance"}) fs::create_directories(tmp / sub);

@@ -28,7 +28,7 @@ std::vector<std::string> visible(const fs::path& dir) {
 void publish_run(const fs::path& dir, const std::vector<std::pair<std::string, std::string>>& files,
                  const std::string& tool = "run") {
   OutputFolder out(dir, {.tool = tool, .refuse_foreign_non_empty = false, .remove_stale = true,
-                         .publish_last = {"report.json"}});
+                         .publish_last = {"report.json"}, .inputs = {}});
   for (const auto& [name, bytes] : files) write_file_atomic(out.path(name), bytes);
   out.publish();
 }
@@ -61,7 +61,7 @@ TEST(OutputFolder, AFailedRunLeavesThePreviousRunUntouched) {
   publish_run(dir, {{"mesh.ply", "m1"}, {"trajectory.txt", "t1"}, {"report.json", "r1"}});
   const auto before = tree(dir);
   try {
-    OutputFolder out(dir, {.tool = "run", .refuse_foreign_non_empty = false, .remove_stale = true, .publish_last = {}});
+    OutputFolder out(dir, {.tool = "run", .refuse_foreign_non_empty = false, .remove_stale = true, .publish_last = {}, .inputs = {}});
     write_file_atomic(out.path("trajectory.txt"), "t2");
     write_file_atomic(out.path("mesh.ply"), "m2");
     throw Error("test", "the run fails midway");
@@ -92,7 +92,7 @@ TEST(OutputFolder, RefusesForeignNonEmptyFoldersWhenAsked) {
   spit(data / "rgb" / "1.png", "precious");
   const auto before = tree(data);
   const OutputFolderOptions refuse{.tool = "synth", .refuse_foreign_non_empty = true, .remove_stale = true,
-                                   .publish_last = {}};
+                                   .publish_last = {}, .inputs = {}};
   EXPECT_THROW(OutputFolder(data, refuse), Error);
   EXPECT_EQ(tree(data), before);
   // A marker that is not a regular file (a symlink to one elsewhere) does not count.
@@ -118,19 +118,21 @@ TEST(OutputFolder, APlantedSymlinkIsNeverWrittenThrough) {
   fs::create_directory_symlink(outside, dir / "viewer");
   EXPECT_THROW(publish_run(dir, {{"viewer/index.html", "v"}}, "view"), Error);
   EXPECT_TRUE(fs::is_empty(outside));
-  // A symlink at a file's own name is replaced by the file, its target untouched.
+  // A symlink at a file's own name is not semap's (issue 44): the publish is refused, the link
+  // and its target untouched.
   spit(outside / "victim", "keep");
   fs::create_symlink(outside / "victim", dir / "report.json");
-  publish_run(dir, {{"mesh.ply", "m"}, {"report.json", "r"}});
+  EXPECT_THROW(publish_run(dir, {{"mesh.ply", "m"}, {"report.json", "r"}}), Error);
   EXPECT_EQ(slurp(outside / "victim"), "keep");
-  EXPECT_FALSE(fs::is_symlink(dir / "report.json"));
-  EXPECT_EQ(slurp(dir / "report.json"), "r");
+  EXPECT_TRUE(fs::is_symlink(dir / "report.json"));
+  EXPECT_EQ(slurp(dir / "mesh.ply"), "m");
   // A manifest edited to point outside (or through the symlink) removes nothing there.
   spit(outside / "victim2", "keep");
-  nlohmann::json hostile{{"files", {"../outside/victim2", "/etc/hostname", "viewer/victim"}}, {"dirs", {"viewer"}}};
+  nlohmann::json hostile{{"files", {"../outside/victim2", "/etc/hostname", "viewer/victim", "report.json"}},
+                         {"dirs", {"viewer"}}};
   spit(outside / "victim", "keep");
   spit(dir / ".semap-manifest-run.json", hostile.dump());
-  publish_run(dir, {{"mesh.ply", "m"}});
+  publish_run(dir, {{"other.ply", "o"}});
   EXPECT_EQ(slurp(outside / "victim2"), "keep");
   EXPECT_EQ(slurp(outside / "victim"), "keep");
   EXPECT_TRUE(fs::is_symlink(dir / "viewer"));
@@ -161,10 +163,12 @@ TEST(OutputFolder, InterruptedPublishesAndKilledProcessesAreCleanedUpNextTime) {
   test::TempDir tmp("semap_outfolder");
   const fs::path dir = tmp / "out";
   publish_run(dir, {{"mesh.ply", "m1"}, {"objects/7.ply", "o7"}, {"report.json", "r1"}});
-  // A publish cut short by power loss: the journal lists objects/9.ply, which was renamed in,
-  // and the manifest was already removed. The next run removes both stale objects.
+  // A publish cut short by power loss: the journal lists the old and new files, objects/9.ply
+  // was renamed in, and the manifest was already removed. The next run removes both stale
+  // objects (and may replace the journal's files: they are semap's).
   spit(dir / "objects" / "9.ply", "o9");
-  spit(dir / ".semap-manifest-run.pending.json", R"({"files": ["objects/9.ply", "objects/7.ply"], "dirs": []})");
+  spit(dir / ".semap-manifest-run.pending.json",
+       R"({"files": ["objects/9.ply", "objects/7.ply", "mesh.ply", "report.json"], "dirs": []})");
   fs::remove(dir / ".semap-manifest-run.json");
   // A killed process' staging folder (pid 2^22 + 7 is above Linux's pid_max) and temp file.
   const fs::path dead = dir / ".semap-staging-4194311-00000000000000aa";
@@ -192,6 +196,62 @@ TEST(OutputFolder, OneWriterAtATimeAndNamesStayInside) {
   EXPECT_THROW(first.path("/etc/passwd"), Error);
   spit(tmp / "file", "x");
   EXPECT_THROW(OutputFolder(tmp / "file", {}), Error);
+}
+
+// Issue 44 class 4: a file at an output's place that semap did not write stops the publish
+// before anything moves; the tool's own earlier files are replaced as before.
+TEST(OutputFolder, PublishNeverReplacesAFileSemapDidNotWrite) {
+  test::TempDir tmp("semap_outfolder");
+  const fs::path dir = tmp / "out";
+  fs::create_directories(dir / "objects");
+  spit(dir / "mesh.ply", "the user's mesh");
+  spit(dir / "objects" / "3.ply", "the user's object");
+  const auto before = tree(dir);
+  for (const std::string user_file : {"mesh.ply", "objects/3.ply"}) {
+    try {
+      publish_run(dir, {{"report.json", "{}"}, {user_file, "semap's"}});
+      ADD_FAILURE() << user_file << " was replaced";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(user_file), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(tree(dir), before) << "nothing of the refused run may appear";
+  }
+  EXPECT_EQ(slurp(dir / "mesh.ply"), "the user's mesh");
+  // Another tool's files are not this tool's: `view` may not replace what `run` wrote.
+  publish_run(dir, {{"report.json", "run 1"}});
+  publish_run(dir, {{"report.json", "run 2"}});  // its own file: replaced
+  EXPECT_EQ(slurp(dir / "report.json"), "run 2");
+  EXPECT_THROW(publish_run(dir, {{"report.json", "view"}}, "view"), Error);
+  EXPECT_EQ(slurp(dir / "report.json"), "run 2");
+}
+
+// Issue 44 class 4: DIR may not be an input nor hold one, by any path (symlink, "..").
+TEST(OutputFolder, RefusesAnOutputFolderThatIsOrContainsAnInput) {
+  test::TempDir scratch("semap_outfolder");
+  const fs::path tmp = scratch.path();
+  const fs::path data = tmp / "rec";
+  fs::create_directories(data / "rgb");
+  spit(data / "report.json", "the recording's own report");
+  fs::create_directory_symlink(data, tmp / "alias");
+  spit(tmp / "map.semap", "map");
+  const auto before = tree(tmp);
+  const auto with_inputs = [](std::vector<fs::path> inputs) {
+    return OutputFolderOptions{.tool = "run", .publish_last = {"report.json"}, .inputs = std::move(inputs)};
+  };
+  for (const fs::path& out : {data, tmp / "alias", data / "rgb" / "..", tmp}) {
+    try {
+      OutputFolder folder(out, with_inputs({data}));
+      ADD_FAILURE() << out << " accepted as the output of input " << data;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(data.string()), std::string::npos) << e.what();
+    }
+  }
+  // A file input (a bag, a map) inside DIR counts too.
+  EXPECT_THROW(OutputFolder(tmp, with_inputs({tmp / "map.semap"})), Error);
+  EXPECT_EQ(tree(tmp), before);
+  // Beside the input, or inside it: accepted.
+  EXPECT_NO_THROW(OutputFolder(tmp / "beside", with_inputs({data})));
+  EXPECT_NO_THROW(OutputFolder(data / "outputs", with_inputs({data})));
 }
 
 }  // namespace

@@ -46,6 +46,9 @@ struct RunOptions {
   /// them: e.g. to watch a live view grow or to test online behaviour. Frames are never dropped;
   /// one that arrives late is fed at once.
   bool realtime = false;
+  /// False (default): out_dir may not be nor contain the dataset (issue 44). True only for
+  /// `semap demo`, which generates its dataset into out_dir/dataset itself.
+  bool dataset_inside_out_dir = false;
   /// Polled between frames: when it returns true (e.g. after SIGINT), reading stops; the frames
   /// so far are mapped to the end (pose graph, refresh) and every output is written.
   std::function<bool()> stop_requested;

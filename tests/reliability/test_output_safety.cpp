@@ -1,0 +1,88 @@
+// Issue 44, class 4 and part of class 8, through the CLI: outputs never replace a file semap
+// did not write, an output folder that is or holds an input is refused, `semap merge A A` is
+// refused, options that cannot apply say so, and a folder or dangling symlink given for a file
+// is named as what it is. Inputs are made here (one small `semap synth` dataset).
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "reliability/reliability_support.hpp"
+
+namespace semap {
+namespace {
+
+namespace fs = std::filesystem;
+using test::expect_one_line_error;
+using test::run_semap;
+using test::slurp;
+using test::snapshot;
+using test::spit;
+using test::changes;
+
+class OutputSafety : public test::CliSuite {
+ protected:
+  static void SetUpTestSuite() { make_suite("semap_output_safety"); }
+  static std::vector<std::string> run_args(const fs::path& dataset, const fs::path& out,
+                                           std::vector<std::string> extra = {}) {
+    std::vector<std::string> args = {"run", dataset.string(), "--out", out.string(), "--poses", "groundtruth",
+                                     "--voxel", "0.05", "--threads", "1", "--segmenter", "groundtruth"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return args;
+  }
+};
+
+TEST_F(OutputSafety, RunKeepsAUsersMeshAndWritesNothing) {
+  const fs::path out = path("user_out");
+  fs::create_directories(out);
+  spit(out / "mesh.ply", "my own mesh");
+  const auto before = snapshot(out);
+  const auto r = run_semap(run_args(clean(), out));
+  expect_one_line_error(r, {"mesh.ply", "not written by semap"});
+  EXPECT_EQ(changes(before, snapshot(out)), "");
+  EXPECT_EQ(slurp(out / "mesh.ply"), "my own mesh");
+}
+
+TEST_F(OutputSafety, RunRefusesTheDatasetOrAFolderHoldingItAsOut) {
+  const fs::path data = copy("rec");
+  fs::create_directory_symlink(data, path("rec_alias"));
+  const auto before = snapshot(tmp_->path());
+  for (const fs::path& out : {data, path("rec_alias"), tmp_->path()}) {
+    const auto r = run_semap(run_args(data, out));
+    expect_one_line_error(r, {out.string(), "input"});
+  }
+  EXPECT_EQ(changes(before, snapshot(tmp_->path())), "");
+}
+
+TEST_F(OutputSafety, MergeRefusesTheSameMapTwiceByAnyPath) {
+  const fs::path map = path("map_a");
+  ASSERT_EQ(run_semap(run_args(clean(), map)).exit_code, 0);
+  fs::create_directory_symlink(map, path("map_alias"));
+  for (const fs::path& other : {map, path("map_alias"), map / "map.semap"}) {
+    const auto r = run_semap({"merge", map.string(), other.string(), "--out", path("merged").string()});
+    expect_one_line_error(r, {"same map"});
+  }
+  EXPECT_FALSE(fs::exists(path("merged") / "map.semap"));
+  // --resume: the saved map's folder is an input as well, also as the --out of `semap run`.
+  const auto before = snapshot(map);
+  const auto r = run_semap(run_args(clean(), path("map_alias"), {"--resume", map.string()}));
+  expect_one_line_error(r, {"input"});
+  EXPECT_EQ(changes(before, snapshot(map)), "");
+}
+
+TEST_F(OutputSafety, IgnoredOptionsAndWrongKindsOfPathSaySo) {
+  // --rgb-topic on a folder: an error, not silently ignored.
+  auto r = run_semap(run_args(clean(), path("topic_out"), {"--rgb-topic", "/camera/rgb"}));
+  expect_one_line_error(r, {"--rgb-topic", "ROS bags only"});
+  // A dangling symlink or a folder where a file is expected: named as what it is.
+  fs::create_symlink(path("nowhere.bag"), path("dangling.bag"));
+  r = run_semap(run_args(path("dangling.bag"), path("dangling_out")));
+  expect_one_line_error(r, {"dangling.bag", "dangling symlink"});
+  fs::create_directories(path("folder.bag"));
+  r = run_semap(run_args(path("folder.bag"), path("folder_out")));
+  expect_one_line_error(r, {"folder.bag", "is a folder"});
+  r = run_semap({"merge", path("dangling.bag").string(), clean().string(), "--out", path("m").string()});
+  expect_one_line_error(r, {"dangling.bag", "dangling symlink"});
+}
+
+}  // namespace
+}  // namespace semap
