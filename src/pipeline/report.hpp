@@ -25,8 +25,11 @@ struct ReportObject {
 
 /// Top-down orthographic picture of the labelled mesh (ceiling cut away), object boxes with
 /// class names and the camera trajectory. "Up" is estimate_gravity's (core/gravity.hpp).
+/// trajectory_error_m: (pose timestamp s, ATE m) pairs (AteResult::per_pose_error_m) that colour
+/// the trajectory green to red; empty: drawn dark grey.
 cv::Mat render_topdown(const TriangleMesh& mesh, const Trajectory& trajectory,
-                       const std::vector<ReportObject>& objects, int max_side_px = 900);
+                       const std::vector<ReportObject>& objects, int max_side_px = 900,
+                       const std::vector<std::pair<double, double>>& trajectory_error_m = {});
 
 /// Per-stage timing table as JSON {stage: {count, mean_ms, median_ms, p95_ms}}.
 nlohmann::json timings_json(const std::map<std::string, TimingSummary>& timings);
@@ -52,8 +55,9 @@ void write_report_html(const std::filesystem::path& out_dir, const nlohmann::jso
                        const std::string& topdown_png, const std::vector<ObjectCard>& cards);
 
 /// Per-frame columns for report.json "frames": timestamp_s, status, ransac_inliers,
-/// tracking_ms, add_frame_ms (one entry per add_frame call, in order).
-nlohmann::json frames_json(const std::vector<FrameResult>& frames);
+/// tracking_ms, add_frame_ms (one entry per add_frame call, in order), and ate_m (the frame's
+/// trajectory error, null where its pose did not associate) when `ate` is given.
+nlohmann::json frames_json(const std::vector<FrameResult>& frames, const std::optional<AteResult>& ate);
 
 /// Number of objects per class name (report.json "objects_per_class").
 std::map<std::string, int> objects_per_class(const std::vector<ObjectSummary>& objects);

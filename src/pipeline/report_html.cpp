@@ -6,6 +6,7 @@
 #include <functional>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -73,7 +74,7 @@ struct Bar {
 /// labels never overlap. `reference` draws a dashed vertical line (e.g. the frame budget).
 std::string svg_bar_chart(const std::vector<Bar>& bars, const std::string& unit,
                           std::optional<std::pair<double, std::string>> reference = std::nullopt) {
-  const int row_px = 22, label_px = 230, plot_px = 560, value_px = 150, top_px = 24;
+  const int row_px = 22, label_px = 230, plot_px = 480, value_px = 250, top_px = 24;
   double max_v = reference ? reference->first : 0.0;
   for (const Bar& b : bars) max_v = std::max({max_v, b.value, b.whisker.value_or(0.0)});
   if (max_v <= 0) max_v = 1;
@@ -217,7 +218,8 @@ std::string svg_series_chart(const std::vector<Series>& series, const std::strin
   double max_v = reference ? reference->first * 1.2 : 0.0;
   for (const Series& l : series) {
     n = std::max(n, l.values.size());
-    for (double v : l.values) max_v = std::max(max_v, v);
+    for (double v : l.values)
+      if (std::isfinite(v)) max_v = std::max(max_v, v);
   }
   if (max_v <= 0) max_v = 1;
   const int top = 10, legend_y = top + kPlotHeightPx + 34;
@@ -241,7 +243,10 @@ std::string svg_series_chart(const std::vector<Series>& series, const std::strin
     s << "<polyline class=\"datum\" fill=\"none\" stroke=\"" << l.colour << "\" stroke-width=\"1.2\" points=\"";
     for (size_t c = 0; c < columns; ++c) {
       const size_t a = c * l.values.size() / columns, b = std::max(a + 1, (c + 1) * l.values.size() / columns);
-      const double v = *std::max_element(l.values.begin() + a, l.values.begin() + std::min(b, l.values.size()));
+      double v = std::numeric_limits<double>::quiet_NaN();  // frames without a value (no ATE): no point
+      for (size_t k = a; k < std::min(b, l.values.size()); ++k)
+        if (std::isfinite(l.values[k]) && !(v >= l.values[k])) v = l.values[k];
+      if (!std::isfinite(v)) continue;
       const double x = kPlotLeftPx + (columns > 1 ? kPlotWidthPx * static_cast<double>(c) / (columns - 1) : 0.0);
       s << fixed(x, 1) << "," << fixed(y_of(v), 1) << " ";
     }
@@ -296,12 +301,32 @@ std::string svg_status_strip(const std::vector<std::string>& status) {
   return s.str();
 }
 
-/// A numeric column of report.json "frames" (missing or non-numeric entries read 0).
-std::vector<double> frame_column(const nlohmann::json& r, const char* key) {
+/// A numeric column of report.json "frames" (null entries read `missing`).
+std::vector<double> frame_column(const nlohmann::json& r, const char* key, double missing = 0.0) {
   std::vector<double> out;
   if (!r.contains("frames") || !r["frames"].contains(key)) return out;
-  for (const auto& v : r["frames"][key]) out.push_back(v.is_number() ? v.get<double>() : 0.0);
+  for (const auto& v : r["frames"][key]) out.push_back(v.is_number() ? v.get<double>() : missing);
   return out;
+}
+
+std::string ate_section(const nlohmann::json& r) {
+  std::ostringstream h;
+  h << "<h2>Trajectory error over time</h2>\n";
+  std::vector<double> ate_cm = frame_column(r, "ate_m", std::numeric_limits<double>::quiet_NaN());
+  const bool any = std::any_of(ate_cm.begin(), ate_cm.end(), [](double v) { return std::isfinite(v); });
+  if (!any) {
+    h << "<p class=\"missing\">"
+      << (r.contains("tracking") ? "No ground-truth trajectory was compared: no trajectory error per frame."
+                                 : "Poses were given, not estimated: there is no trajectory error to plot.")
+      << "</p>\n";
+    return h.str();
+  }
+  for (double& v : ate_cm) v *= 100.0;
+  h << "<p class=\"explain\">Distance in centimetres between each estimated camera position and the "
+       "ground truth, after the one rigid alignment of the whole trajectory (ATE). A rise is where the "
+       "estimate drifted; a drop after a loop closure is the correction.</p>\n"
+    << svg_series_chart({{"trajectory error (ATE)", "#9467bd", ate_cm}}, "cm");
+  return h.str();
 }
 
 std::string per_frame_section(const nlohmann::json& r) {
@@ -336,27 +361,52 @@ std::string per_frame_section(const nlohmann::json& r) {
   return h.str();
 }
 
+/// A stage's name as a person reads it (report.json keeps the key).
+std::string stage_label(const std::string& key) {
+  static const std::map<std::string, std::string> kLabels = {
+      {"read", "reading the frame"},          {"depth_repair", "depth repair"},
+      {"tracking", "tracking"},               {"segmentation", "segmentation"},
+      {"semantic_segmentation", "semantic segmentation"}, {"tsdf_integration", "fusion into the TSDF"},
+      {"object_accumulate", "object evidence"}, {"object_map", "object map update"},
+      {"refresh_archive", "keeping frames for refresh"}, {"map_refresh", "map rebuilt with loop-closed poses"},
+      {"pose_graph_final", "final pose graph"}, {"object_map_final", "final object map"}};
+  const auto it = kLabels.find(key);
+  return it == kLabels.end() ? key : it->second;
+}
+
 std::string timing_section(const nlohmann::json& r) {
   std::ostringstream h;
   h << "<h2>Time per stage</h2>\n";
   const nlohmann::json t = r.value("timings", nlohmann::json::object());
   std::vector<Bar> bars;
+  std::vector<std::string> once;  // stages run once at the end: a sentence, not a bar that dwarfs the rest
   for (auto it = t.begin(); it != t.end(); ++it) {
     const auto mean = number_at(*it, "mean_ms");
     if (!mean) continue;
+    const double count = number_at(*it, "count").value_or(0);
+    if (count <= 1) {
+      once.push_back(stage_label(it.key()) + " " + (*mean >= 1000.0 ? fixed(*mean / 1000.0, 1) + " s" : fixed(*mean, 1) + " ms"));
+      continue;
+    }
     const auto p95 = number_at(*it, "p95_ms");
-    bars.push_back({it.key(), *mean, p95, "#4a7ab5",
-                    fixed(*mean, 1) + " ms" + (p95 ? " (p95 " + fixed(*p95, 1) + ")" : "") + ", " +
-                        fixed(number_at(*it, "count").value_or(0), 0) + "x"});
+    bars.push_back({stage_label(it.key()), *mean, p95, "#4a7ab5",
+                    fixed(*mean, 1) + " ms" + (p95 ? " (p95 " + fixed(*p95, 1) + ")" : "") + ", " + fixed(count, 0) +
+                        " calls"});
   }
-  if (bars.empty()) return h.str() + "<p class=\"missing\">No stage was timed in this run.</p>\n";
+  if (bars.empty() && once.empty()) return h.str() + "<p class=\"missing\">No stage was timed in this run.</p>\n";
   const double budget_ms = 1000.0 / kReportTargetFps;
   h << "<p class=\"explain\">Bar: mean wall time of one call of each stage, in milliseconds; black tick: 95th "
        "percentile (the slow calls); dashed red line: the frame budget at "
     << fixed(kReportTargetFps, 0)
-    << " fps. Stages that run on their own thread (segmentation, refresh) may exceed it without slowing "
-       "tracking. Count: how many calls were timed.</p>\n";
-  h << svg_bar_chart(bars, "ms", std::make_pair(budget_ms, "budget " + fixed(budget_ms, 1) + " ms"));
+    << " fps. Stages on their own thread (segmentation, fusion, objects) overlap tracking; a stage slower than the "
+       "budget falls behind a live camera or skips frames.</p>\n";
+  if (!bars.empty())
+    h << svg_bar_chart(bars, "ms", std::make_pair(budget_ms, "budget " + fixed(budget_ms, 1) + " ms"));
+  if (!once.empty()) {
+    h << "<p>Once, after the last frame: ";
+    for (size_t i = 0; i < once.size(); ++i) h << (i ? ", " : "") << html_escape(once[i]);
+    h << ".</p>\n";
+  }
   return h.str();
 }
 
@@ -450,10 +500,13 @@ void write_report_html(const std::filesystem::path& out_dir, const nlohmann::jso
   if (report.contains("evaluation") && report["evaluation"].contains("note"))
     if (report["evaluation"]["note"].is_string())
       h << "<p class=\"missing\">" << html_escape(report["evaluation"]["note"].get<std::string>()) << "</p>\n";
+  const auto ate_max = number_at(report, "evaluation/ate/max_m");
   h << "<h2>Map from above</h2><p class=\"explain\">Labelled mesh seen from above (ceiling cut away), object "
-       "footprints with class and id, and the camera path (black dot: start).</p>"
-       << png_img(topdown_png, "top-down view of the labelled map with object boxes and trajectory", "map") << "\n";
-  h << per_frame_section(report) << timing_section(report) << class_area_section(report) << objects_section(report)
+       "footprints with class and id, and the camera path (black dot: start"
+    << (ate_max ? "; coloured by trajectory error, green 0 cm to red " + fixed(*ate_max * 100, 1) + " cm"
+                : "; no ground truth, so not coloured by error")
+    << ").</p>" << png_img(topdown_png, "top-down view of the labelled map with object boxes and trajectory", "map") << "\n";
+  h << per_frame_section(report) << ate_section(report) << timing_section(report) << class_area_section(report) << objects_section(report)
     << object_cards_section(cards);
   h << "<h2>Quality and cost</h2>\n" << figure_table(quality_figures(report));
   h << "<p class=\"explain\">Raw figures, with their machine-readable keys, are in report.json.</p>\n";

@@ -445,7 +445,7 @@ nlohmann::json to_json(const RunResult& r) {
   report["objects_per_class"] = r.objects_per_class;
   report["evaluation"] = to_json(r.evaluation);
   report["timings"] = timings_json(r.timings);
-  report["frames"] = frames_json(r.frames);
+  report["frames"] = frames_json(r.frames, r.evaluation.ate);
   if (!m.external_poses)
     report["tracking"] = {{"keyframes", m.keyframes}, {"lost_frames", m.lost_frames},
                           {"relocalisations", m.relocalisations}, {"loop_edges", m.loop_edges},
