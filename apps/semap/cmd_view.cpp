@@ -52,6 +52,19 @@ std::string manifest_json(const fs::path& dir) {
   files["classes"] = "classes.json";
   const fs::path absolute = fs::weakly_canonical(dir);
   nlohmann::json manifest{{"title", absolute.filename().string()}, {"files", files}};
+  // Issue 43: "up" as the run estimated it (report.json gravity.up, core/gravity), the same
+  // estimate the live view gets; without it the page guesses from the mesh and trajectory.
+  if (fs::is_regular_file(dir / "report.json")) {
+    std::string text;
+    try {
+      text = read_regular_file(dir / "report.json", uint64_t{64} << 20, "report");
+    } catch (const Error&) {  // unreadable or huge: the page estimates up itself
+    }
+    const auto report = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
+    if (report.is_object() && report.contains("gravity") && report["gravity"].is_object() &&
+        report["gravity"].contains("up") && report["gravity"]["up"].is_array() && report["gravity"]["up"].size() == 3)
+      manifest["up"] = report["gravity"]["up"];
+  }
   return manifest.dump(2) + "\n";
 }
 

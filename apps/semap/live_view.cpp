@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include "semap/core/error.hpp"
+#include "semap/core/gravity.hpp"
 #include "semap/io/ply_io.hpp"
 #include "semap/io/trajectory_io.hpp"
 // After Eigen: cpp-httplib brings <resolv.h>, whose `_res` macro breaks Eigen's headers.
@@ -133,7 +134,8 @@ void LiveView::take_snapshot(const Mapper& mapper) {
   const Trajectory trajectory = mapper.trajectory();
   const MapperStats stats = mapper.stats();
   std::map<std::string, Bytes> files;
-  files["mesh.ply"] = bytes(encode_ply(mapper.mesh(), "live mesh.ply"));
+  const TriangleMesh mesh = mapper.mesh();
+  files["mesh.ply"] = bytes(encode_ply(mesh, "live mesh.ply"));
   files["trajectory.txt"] = bytes(format_tum_trajectory(trajectory, "live trajectory.txt"));
   files["objects.json"] = bytes(objects_json(mapper.objects()).dump() + "\n");
   const double elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
@@ -142,7 +144,11 @@ void LiveView::take_snapshot(const Mapper& mapper) {
     std::lock_guard lock(files_mutex_);
     version = version_ + 1;
   }
-  files["live.json"] = bytes(live_state(stats, trajectory, version, elapsed_s).dump() + "\n");
+  nlohmann::json state = live_state(stats, trajectory, version, elapsed_s);
+  // Issue 43: the up the report and `semap view` use (core/gravity), not the page's own guess.
+  const Eigen::Vector3d up = estimate_gravity(mesh, trajectory).up_W;
+  state["up"] = {up.x(), up.y(), up.z()};
+  files["live.json"] = bytes(state.dump() + "\n");
   publish(std::move(files));
 }
 

@@ -74,6 +74,7 @@ struct FrameResult {
   bool segmented = false;  ///< sent to segmentation (or came with its own)
   double tracking_ms = 0.0;  ///< time add_frame spent tracking
   double total_ms = 0.0;     ///< time add_frame took (waiting on a full queue included)
+  int ransac_inliers = 0;    ///< voting-RANSAC inliers of the tracking estimate (0: pose given, or RANSAC failed)
 };
 
 /// Counters of the run so far. A snapshot; cheap.
@@ -142,6 +143,9 @@ class Mapper {
   /// casting, queries). Do not keep references past the call.
   void read_tsdf(const std::function<void(const TsdfMap&)>& reader) const;
   MapperStats stats() const;
+  /// Every add_frame() result so far, in call order: the per-frame plots of report.html
+  /// (issue 43). A copy; thread-safe.
+  std::vector<FrameResult> frame_results() const;
   /// Per-stage timings (read, tracking, segmentation, tsdf_integration, object_map, ...).
   std::map<std::string, TimingSummary> timings() const;
   /// Adds a caller-side stage timing (e.g. "read") to timings().

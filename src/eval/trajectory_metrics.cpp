@@ -62,6 +62,7 @@ AteResult compute_ate(const Trajectory& gt, const Trajectory& est, double max_dt
   for (size_t k = 0; k < matches.size(); ++k) {
     const double e = (result.T_gt_est * Eigen::Vector3d(est_positions.col(k)) - gt_positions.col(k)).norm();
     errors[k] = e;
+    result.per_pose_error_m.emplace_back(est[matches[k].second].timestamp, e);
     sum += e;
     sum_sq += e * e;
     result.max = std::max(result.max, e);

@@ -177,6 +177,7 @@ struct Mapper::Impl {
   double integration_workers_ms = 0;  ///< fusion thread: the integrator's worker CPU already charged
   mutable std::mutex log_mutex;
   std::vector<FrameLog> log;  ///< index = sequence number
+  std::vector<FrameResult> frame_results;  ///< under log_mutex: what add_frame returned (issue 43)
   std::string first_segmentation_error;  ///< under log_mutex
   std::map<size_t, TrackedFrame> waiting;  ///< fusion thread: frames held until their labels arrive
   std::atomic<size_t> frames_fused{0}, object_frames{0}, skipped_accumulations{0};
@@ -231,6 +232,7 @@ TrackedFrame Mapper::Impl::locate(const Frame& frame, const std::optional<Pose>&
   timings.add("tracking", t0);
   item.T_world_camera = r.T_world_camera;
   result.status = status_of(r);
+  result.ransac_inliers = r.ransac_inliers;
   item.decoded_depth = frame.depth;
   if (!r.depth.empty()) item.frame.depth = r.depth;
   return item;
@@ -522,6 +524,10 @@ FrameResult Mapper::add_frame(const Frame& frame, FrameHints hints) {
     m.fusion_stage->push(std::move(item));
   }
   result.total_ms = ms_since(t0);
+  {
+    std::lock_guard lock(m.log_mutex);
+    m.frame_results.push_back(result);
+  }
   return result;
 }
 
@@ -642,6 +648,11 @@ MapperStats Mapper::stats() const {
   s.external_poses = m.external_poses.value_or(false);
   s.segmenter = m.segmenter ? m.segmenter->name() : "none";
   return s;
+}
+
+std::vector<FrameResult> Mapper::frame_results() const {
+  std::lock_guard lock(impl_->log_mutex);
+  return impl_->frame_results;
 }
 
 std::map<std::string, TimingSummary> Mapper::timings() const {

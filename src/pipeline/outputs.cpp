@@ -2,6 +2,7 @@
 
 #include "semap/core/error.hpp"
 #include "core/paths.hpp"
+#include "pipeline/report.hpp"
 #include "semap/io/ply_io.hpp"
 #include "semap/io/trajectory_io.hpp"
 
@@ -38,7 +39,9 @@ void write_map_outputs(const Mapper& mapper, const MapOutputs& outputs, const st
 }
 
 void write_map_outputs(const Mapper& mapper, const std::filesystem::path& dir) {
-  write_map_outputs(mapper, collect_outputs(mapper), dir);
+  const MapOutputs outputs = collect_outputs(mapper);
+  write_map_outputs(mapper, outputs, dir);
+  write_run_report(dir, library_run_result(mapper, outputs), outputs);  // issue 43: same files as semap run
 }
 
 }  // namespace semap

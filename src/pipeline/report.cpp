@@ -2,29 +2,19 @@
 
 #include <algorithm>
 #include <numeric>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
 #include "semap/core/gravity.hpp"
 #include "semap/core/labels.hpp"
 #include "core/paths.hpp"
+#include "semap/core/error.hpp"
+#include "semap/eval/consistency_metrics.hpp"
+#include "semap/pipeline/navigation_outputs.hpp"
 
 namespace semap {
 namespace {
-
-std::string html_escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
 
 std::string format_value(const nlohmann::json& v) {
   if (v.is_number_float()) {
@@ -48,10 +38,33 @@ void flatten(const nlohmann::json& j, const std::string& prefix, std::vector<std
   }
 }
 
+/// Where to write an object's name: above its footprint, else below, else further up or down
+/// in steps of one line, the first spot that overlaps no label placed before and stays inside
+/// the image.
+cv::Rect place_label(const std::string& text, const cv::Rect& footprint, const std::vector<cv::Rect>& placed,
+                     cv::Size image) {
+  int baseline = 0;
+  const cv::Size size = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, 0.45, 1, &baseline);
+  const int w = size.width + 4, h = size.height + baseline + 4;
+  const auto clamp_rect = [&](int x, int y) {
+    return cv::Rect(std::clamp(x, 0, std::max(0, image.width - w)), std::clamp(y, 0, std::max(0, image.height - h)), w, h);
+  };
+  const auto is_free = [&](const cv::Rect& r) {
+    return std::none_of(placed.begin(), placed.end(), [&](const cv::Rect& p) { return (p & r).area() > 0; });
+  };
+  for (int step = 0; step < 12; ++step) {
+    for (const cv::Rect& r : {clamp_rect(footprint.x, footprint.y - h - step * h),
+                              clamp_rect(footprint.x, footprint.y + footprint.height + step * h)})
+      if (is_free(r)) return r;
+  }
+  return clamp_rect(footprint.x, footprint.y - h);
+}
+
 }  // namespace
 
 cv::Mat render_topdown(const TriangleMesh& mesh, const Trajectory& trajectory,
-                       const std::vector<ReportObject>& objects, int max_side_px) {
+                       const std::vector<ReportObject>& objects, int max_side_px,
+                       const std::vector<std::pair<double, double>>& trajectory_error_m) {
   const Eigen::Vector3d up = estimate_gravity(mesh, trajectory).up_W;
   // Orthonormal basis (ex, ey) of the ground plane.
   Eigen::Vector3d ex = up.unitOrthogonal();
@@ -107,12 +120,23 @@ cv::Mat render_topdown(const TriangleMesh& mesh, const Trajectory& trajectory,
     else if (coloured && !labelled) c = mesh.vertices.colours[tri[0]];
     cv::fillConvexPoly(image, pts, 3, cv::Scalar(c.b, c.g, c.r), cv::LINE_8);
   }
-  // Trajectory.
-  for (size_t i = 1; i < trajectory.size(); ++i)
+  // Trajectory: dark grey, or from green (no error) to red (the run's largest error) by ATE.
+  const std::map<double, double> error_at(trajectory_error_m.begin(), trajectory_error_m.end());
+  double max_error = 1e-9;
+  for (const auto& [t, e] : trajectory_error_m) max_error = std::max(max_error, e);
+  for (size_t i = 1; i < trajectory.size(); ++i) {
+    cv::Scalar colour(40, 40, 40);
+    if (const auto it = error_at.find(trajectory[i].timestamp); it != error_at.end()) {
+      const double f = std::clamp(it->second / max_error, 0.0, 1.0);
+      colour = cv::Scalar(30, 200 * (1 - f), 60 + 195 * f);  // BGR
+    }
     cv::line(image, to_px(trajectory[i - 1].T_world_camera.translation()), to_px(trajectory[i].T_world_camera.translation()),
-             cv::Scalar(40, 40, 40), 2, cv::LINE_AA);
+             colour, 3, cv::LINE_AA);
+  }
   if (!trajectory.empty()) cv::circle(image, to_px(trajectory.front().T_world_camera.translation()), 6, cv::Scalar(0, 0, 0), -1);
-  // Object footprints (convex hull of the projected box corners) and names.
+  // Object footprints (convex hull of the projected box corners), then their names, placed
+  // where they overlap no name drawn before (issue 43: labels of nearby objects collided).
+  std::vector<cv::Rect> hulls;
   for (const auto& obj : objects) {
     std::vector<cv::Point> pts, hull;
     for (const auto& c : obj.corners) pts.push_back(to_px(c));
@@ -120,9 +144,16 @@ cv::Mat render_topdown(const TriangleMesh& mesh, const Trajectory& trajectory,
     const Rgb8 c = class_colour(obj.class_id);
     cv::polylines(image, hull, true, cv::Scalar(0, 0, 0), 3, cv::LINE_AA);
     cv::polylines(image, hull, true, cv::Scalar(c.b, c.g, c.r), 1, cv::LINE_AA);
-    const cv::Rect box = cv::boundingRect(hull);
-    const std::string text = std::string(class_name(obj.class_id)) + " " + std::to_string(obj.id);
-    cv::putText(image, text, {box.x, std::max(12, box.y - 3)}, cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    hulls.push_back(cv::boundingRect(hull));
+  }
+  std::vector<cv::Rect> placed;
+  for (size_t i = 0; i < objects.size(); ++i) {
+    const std::string text = std::string(class_name(objects[i].class_id)) + " " + std::to_string(objects[i].id);
+    const cv::Rect label = place_label(text, hulls[i], placed, image.size());
+    placed.push_back(label);
+    const cv::Point origin(label.x + 2, label.y + label.height - 4);
+    cv::putText(image, text, origin, cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(255, 255, 255), 3, cv::LINE_AA);
+    cv::putText(image, text, origin, cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   }
   return image;
 }
@@ -139,36 +170,79 @@ nlohmann::json timings_json(const std::map<std::string, TimingSummary>& timings)
   return j;
 }
 
-void write_report_html(const std::filesystem::path& out_dir, const nlohmann::json& report) {
-  std::ostringstream h;
-  h << "<!doctype html><html><head><meta charset=\"utf-8\"><title>semap report</title><style>"
-       "body{font-family:sans-serif;margin:2em;max-width:1100px}table{border-collapse:collapse;margin:1em 0}"
-       "td,th{border:1px solid #ccc;padding:3px 8px;text-align:left}th{background:#eee}"
-       "img{max-width:100%;border:1px solid #ccc}</style></head><body>\n";
-  h << "<h1>semap report</h1>\n";
-  if (report.contains("dataset")) h << "<p>Dataset: <code>" << html_escape(report["dataset"].get<std::string>()) << "</code></p>\n";
-  h << "<h2>Map</h2><img src=\"topdown.png\" alt=\"top-down view of the labelled map with object boxes and trajectory\">\n";
-  auto table = [&](const char* title, const nlohmann::json& j) {
-    if (j.is_null() || j.empty()) return;
-    std::vector<std::pair<std::string, std::string>> rows;
-    flatten(j, "", rows);
-    h << "<h2>" << title << "</h2><table><tr><th>metric</th><th>value</th></tr>\n";
-    for (const auto& [k, v] : rows) h << "<tr><td>" << html_escape(k) << "</td><td>" << html_escape(v) << "</td></tr>\n";
-    h << "</table>\n";
-  };
-  table("Summary", report.value("summary", nlohmann::json{}));
-  table("Evaluation", report.value("evaluation", nlohmann::json{}));
-  table("Objects per class", report.value("objects_per_class", nlohmann::json{}));
-  table("Semantic consistency (no ground truth; semap eval consistency)", report.value("consistency", nlohmann::json{}));
-  if (report.contains("timings")) {
-    h << "<h2>Time per stage</h2><table><tr><th>stage</th><th>count</th><th>mean ms</th><th>median ms</th><th>p95 ms</th></tr>\n";
-    for (auto it = report["timings"].begin(); it != report["timings"].end(); ++it)
-      h << "<tr><td>" << html_escape(it.key()) << "</td><td>" << (*it)["count"] << "</td><td>" << format_value((*it)["mean_ms"])
-        << "</td><td>" << format_value((*it)["median_ms"]) << "</td><td>" << format_value((*it)["p95_ms"]) << "</td></tr>\n";
-    h << "</table>\n";
+std::map<std::string, int> objects_per_class(const std::vector<ObjectSummary>& objects) {
+  std::map<std::string, int> out;
+  for (const ObjectSummary& o : objects) ++out[std::string(class_name(o.class_id))];
+  return out;
+}
+
+std::vector<ReportObject> report_objects(const std::vector<ObjectSummary>& objects) {
+  std::vector<ReportObject> out;
+  for (const ObjectSummary& o : objects) {
+    ReportObject r{o.id, o.class_id, {}};
+    for (int k = 0; k < 8; ++k) {
+      const Eigen::Vector3f s((k & 1) ? 0.5f : -0.5f, (k & 2) ? 0.5f : -0.5f, (k & 4) ? 0.5f : -0.5f);
+      r.corners[k] = (o.box.center + o.box.rotation * s.cwiseProduct(o.box.extent)).cast<double>();
+    }
+    out.push_back(r);
   }
-  h << "</body></html>\n";
-  write_file_atomic(out_dir / "report.html", h.str());
+  return out;
+}
+
+nlohmann::json frames_json(const std::vector<FrameResult>& frames, const std::optional<AteResult>& ate) {
+  nlohmann::json j = {{"timestamp_s", nlohmann::json::array()}, {"status", nlohmann::json::array()},
+                      {"ransac_inliers", nlohmann::json::array()}, {"tracking_ms", nlohmann::json::array()},
+                      {"add_frame_ms", nlohmann::json::array()}};
+  for (const FrameResult& f : frames) {
+    j["timestamp_s"].push_back(f.timestamp);
+    j["status"].push_back(to_string(f.status));
+    j["ransac_inliers"].push_back(f.ransac_inliers);
+    j["tracking_ms"].push_back(f.tracking_ms);
+    j["add_frame_ms"].push_back(f.total_ms);
+  }
+  if (!ate) return j;
+  // ATE per frame where the frame's pose associated with ground truth (null elsewhere).
+  std::map<double, double> error_by_time(ate->per_pose_error_m.begin(), ate->per_pose_error_m.end());
+  j["ate_m"] = nlohmann::json::array();
+  for (const FrameResult& f : frames) {
+    const auto it = error_by_time.find(f.timestamp);
+    j["ate_m"].push_back(it == error_by_time.end() ? nlohmann::json(nullptr) : nlohmann::json(it->second));
+  }
+  return j;
+}
+
+void write_run_report(const std::filesystem::path& dir, const RunResult& result, const MapOutputs& outputs) {
+  const cv::Mat topdown =
+      render_topdown(outputs.mesh, outputs.trajectory, report_objects(outputs.objects), 900,
+                     result.evaluation.ate ? result.evaluation.ate->per_pose_error_m : std::vector<std::pair<double, double>>{});
+  std::vector<uint8_t> png;
+  if (!cv::imencode(".png", topdown, png)) throw Error(dir / "topdown.png", "cannot encode");
+  const std::string topdown_png(png.begin(), png.end());
+  write_file_atomic(dir / "topdown.png", topdown_png);
+  nlohmann::json report = to_json(result);
+  report["consistency"] = to_json(evaluate_consistency(outputs.mesh, outputs.trajectory));  // issue 38
+  report["gravity"] = gravity_report_json(outputs.navigation.gravity);  // issue 39
+  report["navigation"] = navigation_report_json(outputs.navigation);
+  write_file_atomic(dir / "report.json", report.dump(2) + "\n");
+  write_report_html(dir, report, topdown_png,
+                    object_cards(outputs.objects, outputs.navigation.gravity.up_W, outputs.trajectory));
+}
+
+
+RunResult library_run_result(const Mapper& mapper, const MapOutputs& outputs) {
+  RunResult r;
+  r.mapper = mapper.stats();
+  r.poses = r.mapper.external_poses ? PoseSource::groundtruth : PoseSource::track;
+  r.frames_read = r.mapper.frames;
+  r.mesh_vertices = outputs.mesh.vertices.size();
+  r.mesh_triangles = outputs.mesh.triangles.size();
+  r.objects_per_class = objects_per_class(outputs.objects);
+  r.threads = mapper.config().pipeline.threads;
+  r.timings = mapper.timings();
+  r.frames = mapper.frame_results();
+  r.peak_rss_mb = static_cast<double>(peak_rss_bytes()) / (1024.0 * 1024.0);
+  r.driver_measured = false;
+  return r;
 }
 
 std::string summary_table(const nlohmann::json& report) {

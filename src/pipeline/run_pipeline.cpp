@@ -66,25 +66,6 @@ class Prefetcher {
 };
 
 
-std::map<std::string, int> objects_per_class(const std::vector<ObjectSummary>& objects) {
-  std::map<std::string, int> out;
-  for (const ObjectSummary& o : objects) ++out[std::string(class_name(o.class_id))];
-  return out;
-}
-
-std::vector<ReportObject> report_objects(const std::vector<ObjectSummary>& objects) {
-  std::vector<ReportObject> out;
-  for (const ObjectSummary& o : objects) {
-    ReportObject r{o.id, o.class_id, {}};
-    for (int k = 0; k < 8; ++k) {
-      const Eigen::Vector3f s((k & 1) ? 0.5f : -0.5f, (k & 2) ? 0.5f : -0.5f, (k & 4) ? 0.5f : -0.5f);
-      r.corners[k] = (o.box.center + o.box.rotation * s.cwiseProduct(o.box.extent)).cast<double>();
-    }
-    out.push_back(r);
-  }
-  return out;
-}
-
 /// The next frame of the source, or nullopt inside for an unreadable one (warned, skipped);
 /// nullopt at the end or when a stop was requested.
 std::optional<LoadedFrame> pull_frame(FrameSource& source, Mapper& mapper, const std::function<bool()>& stop) {
@@ -174,20 +155,6 @@ void check_run_is_usable(const std::string& input, const MapperStats& stats, con
 /// A resumed run whose every frame was held: it never relocalised into the saved map.
 bool never_relocalised(const MapperStats& stats) {
   return stats.resumed_keyframes > 0 && stats.frames > 0 && stats.held_frames == stats.frames;
-}
-
-void write_run_report(const std::filesystem::path& dir, const RunResult& result, const MapOutputs& outputs) {
-  const cv::Mat topdown = render_topdown(outputs.mesh, outputs.trajectory, report_objects(outputs.objects));
-  write_atomic_with(dir / "topdown.png", [&](const std::filesystem::path& tmp) {
-    if (!cv::imwrite(tmp.string() + ".png", topdown)) throw Error(dir / "topdown.png", "cannot write");
-    std::filesystem::rename(tmp.string() + ".png", tmp);
-  });
-  nlohmann::json report = to_json(result);
-  report["consistency"] = to_json(evaluate_consistency(outputs.mesh, outputs.trajectory));  // issue 38
-  report["gravity"] = gravity_report_json(outputs.navigation.gravity);  // issue 39
-  report["navigation"] = navigation_report_json(outputs.navigation);
-  write_file_atomic(dir / "report.json", report.dump(2) + "\n");
-  write_report_html(dir, report);
 }
 
 }  // namespace
@@ -423,6 +390,7 @@ RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
   result.objects_per_class = objects_per_class(outputs.objects);
   result.threads = config.pipeline.threads;
   result.timings = mapper.timings();
+  result.frames = mapper.frame_results();
   result.fps_online = static_cast<double>(fed + skipped) / std::max(online_s, 1e-9);
   result.cpu_s_online = (mapped.cpu_ms_reading_ended - cpu_start_ms) * 1e-3;
   result.cpu_s_online_opencv_workers = (mapped.opencv_workers_ms_reading_ended - opencv_workers_start_ms) * 1e-3;
@@ -462,11 +430,13 @@ nlohmann::json to_json(const RunResult& r) {
       {"refresh_archive_mb", static_cast<double>(m.refresh_archive_bytes) / (1024.0 * 1024.0)},
       {"mesh_vertices", r.mesh_vertices},
       {"mesh_triangles", r.mesh_triangles},
-      {"fps_online", r.fps_online},
-      {"fps_end_to_end", r.fps_end_to_end},
-      {"cpu_s_online", r.cpu_s_online},
-      {"cpu_s_online_opencv_workers", r.cpu_s_online_opencv_workers},
-      {"wall_s", r.wall_s},
+      {"fps_online", r.driver_measured ? nlohmann::json(r.fps_online) : nlohmann::json(nullptr)},
+      {"fps_end_to_end", r.driver_measured ? nlohmann::json(r.fps_end_to_end) : nlohmann::json(nullptr)},
+      {"cpu_s_online", r.driver_measured ? nlohmann::json(r.cpu_s_online) : nlohmann::json(nullptr)},
+      {"cpu_s_online_opencv_workers",
+       r.driver_measured ? nlohmann::json(r.cpu_s_online_opencv_workers) : nlohmann::json(nullptr)},
+      {"wall_s", r.driver_measured ? nlohmann::json(r.wall_s) : nlohmann::json(nullptr)},
+      {"driver", r.driver_measured ? "semap run" : "library (write_map_outputs)"},
       {"peak_rss_mb", r.peak_rss_mb},
       {"threads", r.threads},
   };
@@ -476,6 +446,7 @@ nlohmann::json to_json(const RunResult& r) {
   report["objects_per_class"] = r.objects_per_class;
   report["evaluation"] = to_json(r.evaluation);
   report["timings"] = timings_json(r.timings);
+  report["frames"] = frames_json(r.frames, r.evaluation.ate);
   if (!m.external_poses)
     report["tracking"] = {{"keyframes", m.keyframes}, {"lost_frames", m.lost_frames},
                           {"relocalisations", m.relocalisations}, {"loop_edges", m.loop_edges},

@@ -224,6 +224,10 @@ TEST(Viewer, NoServeWritesPageClassesAndManifest) {
   TempDir temp("semap_viewer_static");
   write_small_output(temp.path());
   fs::remove(temp / "trajectory.txt");
+  {  // issue 43: the run's up estimate (report.json gravity.up) reaches the page
+    std::ofstream report(temp / "report.json");
+    report << R"({"gravity": {"up": [0.0, -0.6, 0.8]}})";
+  }
   const auto result = run_command(shell_quote(semap_executable().string()) + " view " +
                                   shell_quote(temp.path().string()) + " --no-serve");
   ASSERT_EQ(result.exit_code, 0) << result.output;
@@ -242,6 +246,8 @@ TEST(Viewer, NoServeWritesPageClassesAndManifest) {
   EXPECT_EQ(manifest["files"]["mesh"], "../mesh.ply");
   EXPECT_EQ(manifest["files"]["objects"], "../objects.json");
   EXPECT_TRUE(manifest["files"]["trajectory"].is_null()) << "absent files must not be listed (no 404s)";
+  ASSERT_TRUE(manifest.contains("up")) << manifest.dump();
+  EXPECT_DOUBLE_EQ(manifest["up"][1].get<double>(), -0.6);
 }
 
 // Skips (with the reason) when the browser tool chain is absent; otherwise empty.

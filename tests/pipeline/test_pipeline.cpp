@@ -74,6 +74,28 @@ class PipelineTest : public ::testing::Test {
 };
 test::TempDir* PipelineTest::dir_ = nullptr;
 
+/// Issue 43: report.html reads without a network (no external URL, no script), every plot has
+/// drawn data, and no figure shows as NaN/null. Returns the HTML for further checks.
+std::string expect_readable_report(const std::filesystem::path& dir) {
+  const std::string html = slurp(dir / "report.html");
+  EXPECT_FALSE(html.empty());
+  for (const char* external : {"http:", "https:", "//cdn", "<script", "<link", "@import"})
+    EXPECT_EQ(html.find(external), std::string::npos) << "report.html is not self-contained: " << external;
+  for (const char* bad : {"NaN", "nan<", ">nan", "null", "inf "}) EXPECT_EQ(html.find(bad), std::string::npos) << bad;
+  size_t plots = 0;
+  for (size_t at = html.find("<svg class=\"plot\""); at != std::string::npos; at = html.find("<svg class=\"plot\"", at + 1)) {
+    const size_t end = html.find("</svg>", at);
+    EXPECT_NE(end, std::string::npos);
+    if (end == std::string::npos) break;
+    EXPECT_NE(html.substr(at, end - at).find("class=\"datum\""), std::string::npos) << "empty plot at byte " << at;
+    ++plots;
+  }
+  EXPECT_GE(plots, 3u) << "stage times, labelled area per class and objects per class";
+  EXPECT_NE(html.find("<p class=\"summary\">Mapped "), std::string::npos);
+  EXPECT_TRUE(std::filesystem::exists(dir / "topdown.png"));  // the one local image it shows
+  return html;
+}
+
 TEST_F(PipelineTest, GroundTruthRunWritesEveryOutputAndMeetsSemanticFigures) {
   SemapConfig config;
   config.tsdf.voxel_size = 0.02;
@@ -89,6 +111,19 @@ TEST_F(PipelineTest, GroundTruthRunWritesEveryOutputAndMeetsSemanticFigures) {
   EXPECT_LE(sem.surface_error_mean_m, 0.01);
   EXPECT_GE(sem.completeness, 0.90);
   EXPECT_GT(result.mapper.objects, 0u);
+  expect_readable_report(out("gt"));
+}
+
+// Issue 43: a tracked run without evaluation says in a sentence why ATE is missing.
+TEST_F(PipelineTest, ReportSaysWhyAFigureIsMissing) {
+  RunOptions options = gt_options("tracked_report");
+  options.poses = PoseSource::track;
+  options.max_frames = 30;
+  options.evaluate = false;
+  run_pipeline(options, one_thread_config());
+  const std::string html = expect_readable_report(out("tracked_report"));
+  EXPECT_NE(html.find("the trajectory error (ATE) was not computed"), std::string::npos);
+  EXPECT_NE(html.find("frames lost"), std::string::npos);  // tracked: the tracking sentence
 }
 
 TEST_F(PipelineTest, OneThreadRunsAreByteIdentical) {

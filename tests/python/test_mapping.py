@@ -1,5 +1,6 @@
 """Mapping a TUM slice through the numpy API: results, trajectory quality (ATE), mesh, save(),
 agreement with `semap run`, caller-given poses, misuse."""
+import json
 import pathlib
 import subprocess
 
@@ -98,6 +99,25 @@ def test_same_trajectory_as_semap_run(tum_mapped, tum_path, tmp_path):
     theirs = np.loadtxt(out / "trajectory.txt")
     assert ours.shape == theirs.shape == (TUM_SLICE, 8)
     np.testing.assert_allclose(ours, theirs, atol=1e-9)
+    # Issue 43: mapper.save writes report.json with the keys `semap run` writes.
+    ours_report = json.loads((tmp_path / "py" / "report.json").read_text())
+    theirs_report = json.loads((out / "report.json").read_text())
+
+    def keys(doc, depth=2, prefix=""):
+        out = set()
+        for k, v in doc.items():
+            if k == "evaluation":  # against ground truth: only `semap run` has the dataset's
+                continue
+            out.add(prefix + k)
+            if isinstance(v, dict) and depth > 1 and k not in ("timings", "objects_per_class", "class_area_share"):
+                out |= keys(v, depth - 1, prefix + k + ".")
+        return out
+
+    # frames.ate_m: the per-frame error needs the dataset's ground truth, as "evaluation" does.
+    assert keys(ours_report) == keys(theirs_report) - {"frames.ate_m"}
+    assert ours_report["summary"]["driver"] != theirs_report["summary"]["driver"]
+    assert len(ours_report["frames"]["status"]) == TUM_SLICE
+    assert (tmp_path / "py" / "report.html").stat().st_size > 1000
 
 
 def test_stats_and_timings(tum_mapped):

@@ -581,9 +581,17 @@ function clearMap() {
   state.trajectoryMarkers = null;
 }
 
-function fitToMap(bounds, floorId, poses) {
+// `up`: [x, y, z] from semap (core/gravity: report.json for `semap view`, live.json for the live
+// view), so both views open level the same way; the page's own estimate only without it.
+function givenUp(up) {
+  if (!Array.isArray(up) || up.length !== 3 || !up.every(Number.isFinite)) return null;
+  const v = new THREE.Vector3(up[0], up[1], up[2]);
+  return v.lengthSq() > 1e-12 ? v.normalize() : null;
+}
+
+function fitToMap(bounds, floorId, poses, up) {
   const box = bounds.isEmpty() ? new THREE.Box3(new THREE.Vector3(-1, -1, -1), new THREE.Vector3(1, 1, 1)) : bounds;
-  fitCamera(box, estimateUp(floorId, poses));
+  fitCamera(box, givenUp(up) || estimateUp(floorId, poses));
 }
 
 async function main() {
@@ -608,7 +616,7 @@ async function main() {
   }
   const floorId = state.classes.findIndex((c) => c && c.name === 'floor');
   const { bounds, poses } = await loadMap(files, Boolean(manifest.live));
-  fitToMap(bounds, floorId, poses);
+  fitToMap(bounds, floorId, poses, manifest.up);
   finish();
   if (manifest.live) startLive(manifest.live, files, floorId, bounds);
 }
@@ -645,7 +653,7 @@ function startLive(live, files, floorId, fittedBounds) {
         const { bounds, poses } = await loadMap(files, true);
         const outgrown = fitted === null || !fitted.clone().expandByScalar(0.25 * fitted.getSize(new THREE.Vector3()).length()).containsBox(bounds);
         if (!bounds.isEmpty() && (outgrown || !userMovedView)) {
-          fitToMap(bounds, floorId, poses);
+          fitToMap(bounds, floorId, poses, s.up);
           fitted = bounds.clone();
         }
         state.liveVersion = version;

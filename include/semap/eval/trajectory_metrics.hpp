@@ -16,6 +16,9 @@ struct AteResult {
   double rmse = 0.0, mean = 0.0, median = 0.0, max = 0.0;
   size_t matched = 0;               ///< associated pose pairs used
   Pose T_gt_est = Pose::Identity();  ///< rigid alignment mapping est positions onto gt
+  /// (estimated pose timestamp s, error m) of each associated pair, in estimate order: the
+  /// "ATE over time" plot of report.html (issue 43). Not in to_json (report.json "frames").
+  std::vector<std::pair<double, double>> per_pose_error_m;
 };
 
 /// 1. Associates timestamps (greedy one-to-one, |t_gt - t_est| < max_dt, associate.py).

@@ -30,6 +30,9 @@ MapOutputs collect_outputs(const Mapper& mapper);
 /// scene graph, and map.semap into `dir`
 /// (created when missing). Throws semap::Error naming the file that cannot be written.
 void write_map_outputs(const Mapper& mapper, const MapOutputs& outputs, const std::filesystem::path& dir);
+/// The library's (and Python mapper.save's) whole output: the files above plus report.json,
+/// report.html and topdown.png with the keys `semap run` writes (issue 43; the wall/fps/CPU
+/// figures that only a driver measures are null there, summary.driver says which wrote it).
 void write_map_outputs(const Mapper& mapper, const std::filesystem::path& dir);
 /// objects.json + objects/<id>.ply.
 void write_objects(const std::vector<ObjectSummary>& objects, const std::filesystem::path& dir);

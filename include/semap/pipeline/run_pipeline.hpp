@@ -77,6 +77,9 @@ struct RunResult {
   double peak_rss_mb = 0.0;
   int threads = 1;
   bool stopped_early = false;  ///< stop_requested() ended the input before its end
+  /// false: written by write_map_outputs from a library Mapper (Python mapper.save), with no
+  /// driver timing the run: wall_s, fps_* and cpu_s_* are null in report.json (issue 43).
+  bool driver_measured = true;
   /// --resume given, but no frame relocalised into the saved map: the recording was mapped on
   /// its own (issue 19: never merged at a guessed pose).
   bool not_merged = false;
@@ -85,6 +88,7 @@ struct RunResult {
   std::filesystem::path default_models_dir;
   Evaluation evaluation;
   std::map<std::string, TimingSummary> timings;
+  std::vector<FrameResult> frames;  ///< Mapper::frame_results(): report.json "frames" (issue 43)
 };
 nlohmann::json to_json(const RunResult& result);
 
