@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <iostream>
 #include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -139,6 +140,26 @@ inline double mean_abs_diff(const cv::Mat& a, const cv::Mat& b) {
   cv::Mat d;
   cv::absdiff(a, b, d);
   return cv::mean(d)[0];
+}
+
+/// Calls fn, expecting one semap::Error line that names `file` and contains `what` (printed
+/// with `tag`, so the test log shows the messages users get).
+template <class F>
+void expect_one_line_error(F&& fn, const std::string& file, const std::string& what, const char* tag) {
+  try {
+    fn();
+  } catch (const Error& e) {
+    const std::string message = e.what();
+    std::cout << "[" << tag << "] " << message << std::endl;
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+    EXPECT_NE(message.find(file), std::string::npos) << message;
+    EXPECT_NE(message.find(what), std::string::npos) << message;
+    return;
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "non-semap exception: " << e.what();
+    return;
+  }
+  ADD_FAILURE() << file << " read without error (expected '" << what << "')";
 }
 
 /// Topics of a camera driver's recording.
