@@ -62,10 +62,12 @@ py::dict run(const std::filesystem::path& dataset, const std::filesystem::path& 
   nlohmann::json j;
   {
     py::gil_scoped_release nogil;
-    j = to_json(run_pipeline(options, parsed));
-    // What the run published: report.json adds the map's figures (consistency, gravity,
-    // navigation) to the run's result.
-    if (std::ifstream published(out / "report.json"); published) j = nlohmann::json::parse(published);
+    run_pipeline(options, parsed);
+    // The report.json the run published (it always does when it returns): the run's result plus
+    // the map's figures (consistency, gravity, navigation).
+    std::ifstream published(out / "report.json");
+    if (!published) throw Error(out / "report.json", "the run returned without publishing it");
+    j = nlohmann::json::parse(published);
   }
   return json_to_python(j);
 }

@@ -298,20 +298,17 @@ void Mapper::Impl::fuse_waiting(bool block) {
 }
 
 bool Mapper::Impl::collect_segmentation(TrackedFrame& item, bool block) {
-  const size_t sequence = item.frame.index;
-  if (item.awaits_primary) {
-    auto result = primary_channel->take(sequence, block);
+  // One network's result, if it is awaited: false while it has not arrived (block: waits).
+  const auto collect = [&](SegmentationChannel& channel, bool& awaits, std::optional<SegmentationResult>& into) {
+    if (!awaits) return true;
+    auto result = channel.take(item.frame.index, block);
     if (!result) return false;
-    item.primary_result = std::move(*result);
-    item.awaits_primary = false;
-  }
-  if (item.awaits_semantic) {
-    auto result = semantic_channel->take(sequence, block);
-    if (!result) return false;
-    item.semantic_result = std::move(*result);
-    item.awaits_semantic = false;
-  }
-  return true;
+    into = std::move(*result);
+    awaits = false;
+    return true;
+  };
+  return collect(*primary_channel, item.awaits_primary, item.primary_result) &&
+         (!semantic_channel || collect(*semantic_channel, item.awaits_semantic, item.semantic_result));
 }
 
 std::optional<SegmentationResult> Mapper::Impl::combined_segmentation(TrackedFrame& item) const {

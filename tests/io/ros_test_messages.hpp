@@ -88,6 +88,7 @@ inline Trajectory track(const DatasetReader& reader, size_t frames) {
 /// A small real frame (the first TUM frame at 80x60) for the encoding bags.
 struct SmallFrame {
   cv::Mat bgr, depth_m;
+  cv::Mat mono_bgr;  ///< bgr through grey and back: what a mono8 image of it decodes to
   PinholeIntrinsics k;
 };
 
@@ -101,6 +102,9 @@ inline SmallFrame small_frame() {
   // Millimetre-exact depths, so 16UC1 and 32FC1 carry the same values.
   for (auto it = s.depth_m.begin<float>(); it != s.depth_m.end<float>(); ++it) *it = std::round(*it * 1000.0f) / 1000.0f;
   s.k = folder->camera().depth.scaled(80.0 / 640.0);
+  cv::Mat grey;
+  cv::cvtColor(s.bgr, grey, cv::COLOR_BGR2GRAY);
+  cv::cvtColor(grey, s.mono_bgr, cv::COLOR_GRAY2BGR);
   return s;
 }
 

@@ -228,6 +228,16 @@ class CliSuite : public ::testing::Test {
     fs::copy(clean(), dir, fs::copy_options::recursive);
     return dir;
   }
+  /// `semap run DATASET --out OUT` with ground-truth poses and labels, 5 cm voxels, one thread,
+  /// then `extra` (which may name another --segmenter).
+  static std::vector<std::string> run_args(const fs::path& dataset, const fs::path& out,
+                                           std::vector<std::string> extra = {}) {
+    std::vector<std::string> args = {"run", dataset.string(), "--out", out.string(), "--poses", "groundtruth",
+                                     "--voxel", "0.05", "--threads", "1"};
+    if (std::find(extra.begin(), extra.end(), "--segmenter") == extra.end()) extra.insert(extra.end(), {"--segmenter", "groundtruth"});
+    args.insert(args.end(), extra.begin(), extra.end());
+    return args;
+  }
   inline static TempDir* tmp_ = nullptr;
 };
 

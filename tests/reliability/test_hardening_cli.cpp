@@ -58,10 +58,6 @@ class HardeningCli : public test::CliSuite {
     for (size_t at; (at = output.find(base)) != std::string::npos;) output.erase(at, base.size());
     return std::regex_search(output, std::regex("[0-9]{20}"));
   }
-  static std::vector<std::string> run_args(const fs::path& dataset, const fs::path& out) {
-    return {"run", dataset.string(), "--out", out.string(), "--poses", "groundtruth", "--segmenter", "groundtruth",
-            "--voxel", "0.05", "--threads", "1"};
-  }
 };
 
 // ------------------------------------------------------------ Data loss and writes where they must not go

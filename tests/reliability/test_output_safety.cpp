@@ -22,13 +22,6 @@ using test::changes;
 class OutputSafety : public test::CliSuite {
  protected:
   static void SetUpTestSuite() { make_suite("semap_output_safety"); }
-  static std::vector<std::string> run_args(const fs::path& dataset, const fs::path& out,
-                                           std::vector<std::string> extra = {}) {
-    std::vector<std::string> args = {"run", dataset.string(), "--out", out.string(), "--poses", "groundtruth",
-                                     "--voxel", "0.05", "--threads", "1", "--segmenter", "groundtruth"};
-    args.insert(args.end(), extra.begin(), extra.end());
-    return args;
-  }
 };
 
 TEST_F(OutputSafety, RunKeepsAUsersMeshAndWritesNothing) {

@@ -30,14 +30,6 @@ using test::visible;
 class RunHardening : public test::CliSuite {
  protected:
   static void SetUpTestSuite() { make_suite("semap_run_hardening"); }
-  static std::vector<std::string> run_args(const fs::path& dataset, const fs::path& out,
-                                           std::vector<std::string> extra = {}) {
-    std::vector<std::string> args = {"run", dataset.string(), "--out", out.string(), "--poses", "groundtruth",
-                                     "--voxel", "0.05", "--threads", "1"};
-    if (std::find(extra.begin(), extra.end(), "--segmenter") == extra.end()) extra.insert(extra.end(), {"--segmenter", "groundtruth"});
-    args.insert(args.end(), extra.begin(), extra.end());
-    return args;
-  }
 };
 
 // ------------------------------------------------------------ Data loss and writes where they must not go
