@@ -578,12 +578,14 @@ Trajectory Mapper::trajectory() const { return impl_->current_trajectory(); }
 
 TriangleMesh Mapper::mesh() const {
   TriangleMesh mesh;
+  SurfaceLabelEvidence evidence;
   {
     std::lock_guard lock(impl_->tsdf_mutex);
     mesh = impl_->tsdf.extract_mesh();
+    evidence = SurfaceLabelEvidence(impl_->tsdf.map(), mesh.vertices.points);
   }
   // Issue 38: labels that contradict their surface lose to those that fit (tsdf/label_priors.hpp).
-  apply_label_priors(mesh, estimate_gravity(mesh, trajectory()), impl_->config.tsdf);
+  apply_label_priors(mesh, estimate_gravity(mesh, trajectory()), impl_->config.tsdf, evidence);
   std::lock_guard lock(impl_->objects_mutex);
   mesh.vertices.instances =
       impl_->objects.instance_ids_for(mesh.vertices.points, static_cast<float>(1.5 * impl_->config.tsdf.voxel_size));

@@ -158,7 +158,8 @@ ClassId region_class(const TriangleMesh& mesh, const Geometry& g, const Region& 
 
 }  // namespace
 
-LabelPriorStats apply_label_priors(TriangleMesh& mesh, const GravityEstimate& gravity, const TsdfConfig& c) {
+LabelPriorStats apply_label_priors(TriangleMesh& mesh, const GravityEstimate& gravity, const TsdfConfig& c,
+                                   const SurfaceLabelEvidence& evidence) {
   LabelPriorStats stats;
   auto& labels = mesh.vertices.labels;
   if (labels.size() != mesh.vertices.points.size() || mesh.triangles.empty()) return stats;
@@ -214,8 +215,21 @@ LabelPriorStats apply_label_priors(TriangleMesh& mesh, const GravityEstimate& gr
         }
     }
   }
-  for (size_t v = 0; v < labels.size(); ++v)
+  const bool use_evidence = (c.label_prior_normals || c.label_prior_heights) && evidence.size() == labels.size();
+  for (size_t v = 0; v < labels.size(); ++v) {
+    if (!contradicts[v] && labels[v] != 0) continue;
     if (contradicts[v]) labels[v] = 0;
+    if (!use_evidence) continue;
+    const Facing f = facing(g.vertex_normal[v], up, cos_tilt, sin_tilt);
+    const double height = height_of(mesh.vertices.points[v].cast<double>());
+    std::array<bool, kNumClasses> ruled_out{};
+    bool any = false;
+    for (Label structural : {Label::kWall, Label::kFloor, Label::kCeiling})
+      any |= ruled_out[id(structural)] = !rules.fits(id(structural), f, height);
+    if (!any) continue;  // nothing ruled out: the voxel's own decision stands
+    labels[v] = evidence.label_excluding(v, ruled_out);
+    stats.refitted += labels[v] != 0;
+  }
   return stats;
 }
 

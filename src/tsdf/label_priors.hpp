@@ -21,11 +21,17 @@
 //    the stuff classes and picture). An unlabelled region facing up at floor height is floor;
 //    one facing down at ceiling height is ceiling (the lowest and highest large horizontal
 //    surfaces).
+//  - evidence that fits: a vertex still unlabelled or contradicting after the regions, where the
+//    normal or height rules rule out some classes, gets the class its voxel's fused evidence
+//    (SurfaceLabelEvidence) shows once those classes are impossible: the posterior conditioned on
+//    the geometry, decided by the same thresholds as every label. A horizontal counter that the
+//    network calls wall about as often as cabinet becomes cabinet, not unlabelled.
 #include <cstddef>
 
 #include "semap/core/gravity.hpp"
 #include "semap/core/point_cloud.hpp"
 #include "semap/tsdf/tsdf_config.hpp"
+#include "tsdf/voxel_label.hpp"
 
 namespace semap {
 
@@ -34,12 +40,15 @@ struct LabelPriorStats {
   size_t contradicting = 0;  ///< labels the normal or height rules rejected
   size_t filled = 0;         ///< vertices given their region's class (from unlabelled or contradicting)
   size_t replaced = 0;       ///< object labels in a wall/floor/ceiling plane given its class
+  size_t refitted = 0;       ///< vertices given the class their evidence shows among the fitting ones
   size_t regions = 0;        ///< regions that decided a class
   double region_area_m2 = 0.0;  ///< their area
 };
 
 /// Applies the rules of the file comment that `config` switches on to mesh.vertices.labels.
-/// A mesh without labels is left alone. Thread safety: touches only `mesh`.
-LabelPriorStats apply_label_priors(TriangleMesh& mesh, const GravityEstimate& gravity, const TsdfConfig& config);
+/// `evidence` (one entry per vertex, or empty) enables the last rule. A mesh without labels is
+/// left alone. Thread safety: touches only `mesh`.
+LabelPriorStats apply_label_priors(TriangleMesh& mesh, const GravityEstimate& gravity, const TsdfConfig& config,
+                                   const SurfaceLabelEvidence& evidence = {});
 
 }  // namespace semap

@@ -10,20 +10,27 @@
 
 namespace semap {
 
+namespace {
+
+/// The odds by which an argmax must lead the runner-up: a lead of k frames' votes gives r^k; the
+/// threshold r^(N - 1/2) lies midway (in log) between N - 1 and N, so the quantised probabilities
+/// cannot tip it. Capped at the odds the floor can hold.
+float min_lead_odds(const TsdfMap& map) {
+  const int min_frames = map.config().mesh_min_label_frames;
+  return min_frames == 0 ? 0.0f
+                         : static_cast<float>(std::min(std::pow(map.config().bayes_frame_odds(), min_frames - 0.5),
+                                                       0.9 * map.bayes().max_odds()));
+}
+
+}  // namespace
+
 VoxelLabelRule::VoxelLabelRule(const TsdfMap& map)
     : map_(map),
       use_bayes_(map.has_bayes_layer()),
       bayes_stride_(map.bayes().bytes_per_voxel()),
       min_votes_(map.config().mesh_min_label_votes),
-      max_bayes_q_(map.bayes().encode(static_cast<float>(map.config().mesh_min_label_probability))) {
-  // The argmax must lead the runner-up by N frames' votes. The odds of a lead of k frames are
-  // r^k; the threshold r^(N - 1/2) lies midway (in log) between N - 1 and N, so the quantised
-  // probabilities cannot tip it. Capped at the odds the floor can hold.
-  const int min_frames = map.config().mesh_min_label_frames;
-  min_odds_ = min_frames == 0 ? 0.0f
-                              : static_cast<float>(std::min(std::pow(map.config().bayes_frame_odds(), min_frames - 0.5),
-                                                            0.9 * map.bayes().max_odds()));
-}
+      max_bayes_q_(map.bayes().encode(static_cast<float>(map.config().mesh_min_label_probability))),
+      min_odds_(min_lead_odds(map)) {}
 
 ClassId VoxelLabelRule::label(const Block& block, int li) const {
   if (use_bayes_) {
@@ -31,6 +38,50 @@ ClassId VoxelLabelRule::label(const Block& block, int li) const {
     return bayes[1] <= max_bayes_q_ && map_.bayes().top_odds(bayes) >= min_odds_ ? BayesLayerCodec::argmax(bayes) : 0;
   }
   return (block.label_confidence && block.label_confidence[li] >= min_votes_) ? block.voxels[li].label : 0;
+}
+
+SurfaceLabelEvidence::SurfaceLabelEvidence(const TsdfMap& map, const std::vector<Eigen::Vector3f>& points)
+    : codec_(map.bayes()),
+      stride_(map.bayes().bytes_per_voxel()),
+      min_probability_(static_cast<float>(map.config().mesh_min_label_probability)),
+      min_odds_(min_lead_odds(map)) {
+  if (!map.has_bayes_layer()) return;
+  bytes_.assign(points.size() * stride_, 0);  // all zero = never labelled
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    CachedVoxelLookup lookup(map);
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      const Block* block = nullptr;
+      int li = 0;
+      if (lookup.observed(map.voxel_of_point(points[i]), &block, &li))
+        std::copy_n(&block->bayes[static_cast<size_t>(li) * stride_], stride_, &bytes_[i * stride_]);
+    }
+  });
+}
+
+ClassId SurfaceLabelEvidence::label_excluding(size_t i, const std::array<bool, kNumClasses>& ruled_out) const {
+  if (i >= size()) return 0;
+  const ClassDistribution d = codec_.read(&bytes_[i * stride_]);
+  if (d.count == 0) return 0;
+  // The remaining classes' mass normalises the posterior conditioned on the ruled-out ones.
+  int unlisted_remaining = kNumRealClasses - d.count;
+  for (int c = 1; c < kNumClasses; ++c)
+    if (ruled_out[c] && std::find(d.classes.begin(), d.classes.begin() + d.count, ClassId(c)) == d.classes.begin() + d.count)
+      --unlisted_remaining;
+  float remaining = d.rest_each * static_cast<float>(std::max(unlisted_remaining, 0));
+  ClassId best = 0;
+  float best_p = 0.0f, second_p = unlisted_remaining > 0 ? d.rest_each : 0.0f;
+  for (int k = 0; k < d.count; ++k) {  // listed in decreasing probability
+    if (ruled_out[d.classes[k]]) continue;
+    remaining += d.probabilities[k];
+    if (best == 0) {
+      best = d.classes[k];
+      best_p = d.probabilities[k];
+    } else {
+      second_p = std::max(second_p, d.probabilities[k]);
+    }
+  }
+  if (best == 0 || remaining <= 0.0f || best_p < min_probability_ * remaining) return 0;
+  return second_p <= 0.0f || best_p >= min_odds_ * second_p ? best : 0;
 }
 
 std::vector<ClassId> surface_labels(const TsdfMap& map, const std::vector<Eigen::Vector3f>& points) {

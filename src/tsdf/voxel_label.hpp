@@ -1,6 +1,9 @@
 #pragma once
 // The class a voxel shows: the one rule for the mesh's vertex labels and the labels of object
 // points, so that both say the same where the evidence is thin.
+#include <array>
+#include <vector>
+
 #include "semap/core/labels.hpp"
 #include "semap/tsdf/tsdf_map.hpp"
 
@@ -23,6 +26,29 @@ class VoxelLabelRule {
   int min_votes_;
   uint8_t max_bayes_q_;
   float min_odds_;
+};
+
+/// The fused class distribution of the voxel containing each of a mesh's vertices, for deciding a
+/// label when the surface's geometry rules some classes out (tsdf/label_priors.hpp): the
+/// posterior conditioned on those classes being impossible, decided by VoxelLabelRule's
+/// thresholds. Empty when the map has no Bayesian layer. Thread safety: const after construction.
+class SurfaceLabelEvidence {
+ public:
+  SurfaceLabelEvidence() = default;
+  /// Copies the Bayesian layer's bytes at each point (TBB); the map must not change meanwhile.
+  SurfaceLabelEvidence(const TsdfMap& map, const std::vector<Eigen::Vector3f>& points);
+  bool empty() const { return bytes_.empty(); }
+  size_t size() const { return stride_ > 0 ? bytes_.size() / stride_ : 0; }
+  /// The label of point i when every class c with ruled_out[c] cannot be there: the most probable
+  /// remaining class, shown when its conditioned probability reaches mesh_min_label_probability
+  /// and it leads the remaining runner-up by mesh_min_label_frames frames' votes; else 0.
+  ClassId label_excluding(size_t i, const std::array<bool, kNumClasses>& ruled_out) const;
+
+ private:
+  BayesLayerCodec codec_;
+  int stride_ = 0;
+  std::vector<uint8_t> bytes_;
+  float min_probability_ = 1.0f, min_odds_ = 0.0f;
 };
 
 /// The label (VoxelLabelRule) of the voxel containing each point; 0 where it is unobserved.

@@ -11,6 +11,7 @@
 
 #include "semap/eval/consistency_metrics.hpp"
 #include "tsdf/label_priors.hpp"
+#include "tsdf/voxel_label.hpp"
 
 namespace semap {
 namespace {
@@ -158,7 +159,81 @@ TEST(LabelPriors, AllRulesOffChangeNothing) {
   const std::vector<ClassId> before = w.mesh.vertices.labels;
   const LabelPriorStats s = apply_label_priors(w.mesh, gravity(true), rules(false, false, false));
   EXPECT_EQ(w.mesh.vertices.labels, before);
-  EXPECT_EQ(s.filled + s.replaced + s.contradicting, 0u);
+  EXPECT_EQ(s.filled + s.replaced + s.contradicting + s.refitted, 0u);
+}
+
+/// A counter top (horizontal, 0.9 m above the floor) and a wall beside it, both seen in ten
+/// frames by a network that calls each wall six times and cabinet four, interleaved: the fused
+/// evidence is the same on both and too split to show a label (wall leads by two frames' votes);
+/// only the geometry tells them apart.
+struct CounterAndWall {
+  TsdfMap map{TsdfConfig{}};
+  TriangleMesh mesh;
+  size_t counter_vertices = 0;
+
+  CounterAndWall() {
+    World w;
+    std::mt19937 rng(3);
+    using V = Eigen::Vector3f;
+    add_plane(w, V(0.51f, 0.51f, 0.91f), V(0.5f, 0, 0), V(0, 0.5f, 0), id(Label::kCabinet), 0, 1.0, 0.0, rng);
+    counter_vertices = w.mesh.vertices.points.size();
+    add_plane(w, V(0.51f, 0.01f, 0.31f), V(0, 0, 1.2f), V(0.5f, 0, 0), id(Label::kWall), 0, 1.0, 0.0, rng);
+    mesh = std::move(w.mesh);
+    for (const Eigen::Vector3f& p : mesh.vertices.points) observe(map.voxel_of_point(p));
+    mesh.vertices.labels = surface_labels(map, mesh.vertices.points);
+  }
+  void observe(const VoxelIndex& v) {
+    Block& block = map.allocate_block(block_of_voxel(v));
+    const int li = local_index(v);
+    if (block.voxels[li].weight_q != 0) return;
+    block.voxels[li].weight_q = 1;
+    uint8_t* bayes = &block.bayes[static_cast<size_t>(li) * map.bayes().bytes_per_voxel()];
+    const float c = static_cast<float>(map.config().bayes_default_confidence);
+    for (int frame = 0; frame < 10; ++frame)
+      map.bayes().update(bayes, ClassDistribution::from_label(frame % 5 < 3 ? id(Label::kWall) : id(Label::kCabinet), c,
+                                                               map.config().bayes_confusion_classes));
+  }
+  double share(size_t from, size_t to, Label l) const {
+    size_t n = 0;
+    for (size_t v = from; v < to; ++v) n += mesh.vertices.labels[v] == id(l);
+    return double(n) / double(to - from);
+  }
+};
+
+TEST(LabelPriors, GeometryRulingAClassOutDecidesBetweenTheRest) {
+  CounterAndWall without, with;
+  const size_t counter = with.counter_vertices, all = with.mesh.vertices.points.size();
+  ASSERT_GT(with.share(0, all, Label::kUnlabelled), 0.99);  // split evidence: nothing shown
+  apply_label_priors(without.mesh, gravity(true), rules(true, true, false));
+  const LabelPriorStats s =
+      apply_label_priors(with.mesh, gravity(true), rules(true, true, false), SurfaceLabelEvidence(with.map, with.mesh.vertices.points));
+  // On the counter wall is ruled out, and what remains is cabinet by four frames' votes.
+  EXPECT_GT(with.share(0, counter, Label::kCabinet), 0.99);
+  EXPECT_GT(without.share(0, counter, Label::kUnlabelled), 0.99);
+  EXPECT_GE(s.refitted, counter);
+  // On the wall, where both classes fit, the split evidence still shows nothing.
+  EXPECT_GT(with.share(counter, all, Label::kUnlabelled), 0.99);
+}
+
+TEST(LabelPriors, EvidenceTooThinAfterTheRuleLeavesTheVertexUnlabelled) {
+  // The counter seen as wall six times, then cabinet once: wall ruled out, cabinet's one vote
+  // does not lead the rest by mesh_min_label_frames frames, so it stays unlabelled, not guessed.
+  CounterAndWall world;
+  TsdfConfig strict = rules(true, true, false);
+  for (size_t v = 0; v < world.counter_vertices; ++v) {
+    const VoxelIndex voxel = world.map.voxel_of_point(world.mesh.vertices.points[v]);
+    Block* block = world.map.find_block(block_of_voxel(voxel));
+    uint8_t* bayes = &block->bayes[static_cast<size_t>(local_index(voxel)) * world.map.bayes().bytes_per_voxel()];
+    std::fill_n(bayes, world.map.bayes().bytes_per_voxel(), 0);
+    const float c = static_cast<float>(world.map.config().bayes_default_confidence);
+    for (int frame = 0; frame < 7; ++frame)
+      world.map.bayes().update(bayes, ClassDistribution::from_label(frame < 6 ? id(Label::kWall) : id(Label::kCabinet), c,
+                                                                     world.map.config().bayes_confusion_classes));
+  }
+  world.mesh.vertices.labels = surface_labels(world.map, world.mesh.vertices.points);
+  ASSERT_GT(world.share(0, world.counter_vertices, Label::kWall), 0.99);
+  apply_label_priors(world.mesh, gravity(true), strict, SurfaceLabelEvidence(world.map, world.mesh.vertices.points));
+  EXPECT_GT(world.share(0, world.counter_vertices, Label::kUnlabelled), 0.99);
 }
 
 }  // namespace
