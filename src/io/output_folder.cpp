@@ -314,6 +314,30 @@ bool same_file(const fs::path& a, const fs::path& b) {
   return fs::equivalent(a, b, ec) && !ec;
 }
 
+/// Issue 44: every output whose place in DIR already holds something this tool's manifest or
+/// journal does not list (a user's mesh.ply) stops the publish before anything is moved.
+void refuse_foreign_targets(int dir_fd, const std::vector<std::string>& files, const Manifest& owned, const fs::path& dir,
+                            const std::string& manifest) {
+  for (const auto& rel : files) {
+    if (owned.files.count(rel)) continue;
+    const fs::path p(rel);
+    Fd parent = parent_of_listed(dir_fd, rel);
+    struct stat st {};
+    if (parent.fd < 0 || ::fstatat(parent.fd, p.filename().c_str(), &st, AT_SYMLINK_NOFOLLOW) != 0) continue;
+    throw Error(dir / p, "exists and was not written by semap (not listed in " + manifest +
+                             "): refusing to replace it; move it away or give another output folder");
+  }
+}
+
+/// What `tool` wrote into DIR: its manifest, and the journal of a publish cut short.
+Manifest owned_by_tool(int dir_fd, const std::string& tool) {
+  Manifest owned = parse_manifest(read_at(dir_fd, manifest_name(tool)));
+  const Manifest pending = parse_manifest(read_at(dir_fd, journal_name(tool)));
+  owned.files.insert(pending.files.begin(), pending.files.end());
+  owned.dirs.insert(pending.dirs.begin(), pending.dirs.end());
+  return owned;
+}
+
 }  // namespace
 
 // METHODS.md does not cover I/O; issue 44 class 4: an output folder never is or holds an input.
@@ -362,6 +386,8 @@ OutputFolder::OutputFolder(fs::path dir, OutputFolderOptions options) : dir_(std
     if (::flock(dir_fd_, LOCK_EX | LOCK_NB) != 0)
       throw Error(dir_, "is being written by another semap command; wait until it finishes");
     remove_dead_leftovers(dir_fd_);
+    refuse_foreign_targets(dir_fd_, options_.planned, owned_by_tool(dir_fd_, options_.tool), dir_,
+                           manifest_name(options_.tool));
     const bool has_marker = is_regular_at(dir_fd_, kMarker);
     bool non_empty = false;
     for (const auto& [name, type] : list_at(dir_fd_)) non_empty = non_empty || !is_internal_name(name);
@@ -449,21 +475,6 @@ void move_into_place(int dir_fd, int staging_fd, const std::vector<std::string>&
   }
 }
 
-/// Issue 44: every output whose place in DIR already holds something this tool's manifest or
-/// journal does not list (a user's mesh.ply) stops the publish before anything is moved.
-void refuse_foreign_targets(int dir_fd, const std::vector<std::string>& files, const Manifest& owned, const fs::path& dir,
-                            const std::string& manifest) {
-  for (const auto& rel : files) {
-    if (owned.files.count(rel)) continue;
-    const fs::path p(rel);
-    Fd parent = parent_of_listed(dir_fd, rel);
-    struct stat st {};
-    if (parent.fd < 0 || ::fstatat(parent.fd, p.filename().c_str(), &st, AT_SYMLINK_NOFOLLOW) != 0) continue;
-    throw Error(dir / p, "exists and was not written by semap (not listed in " + manifest +
-                             "): refusing to replace it; move it away or give another output folder");
-  }
-}
-
 /// The previous run's files and folders this run did not write: removed (remove_stale) or
 /// kept and listed again. `manifest` holds this run's entries and receives the kept ones.
 void settle_previous_run(int dir_fd, const Manifest& old, bool remove_stale, Manifest& manifest) {
@@ -497,10 +508,7 @@ std::vector<std::string> OutputFolder::publish() {
   walk_staging(staging_fd.fd, "", files, dirs, 0);
   order_for_publish(files, options_.publish_last);
   const std::string manifest = manifest_name(options_.tool), journal = journal_name(options_.tool);
-  Manifest old = parse_manifest(read_at(dir_fd_, manifest));
-  const Manifest pending = parse_manifest(read_at(dir_fd_, journal));
-  old.files.insert(pending.files.begin(), pending.files.end());
-  old.dirs.insert(pending.dirs.begin(), pending.dirs.end());
+  const Manifest old = owned_by_tool(dir_fd_, options_.tool);
   refuse_foreign_targets(dir_fd_, files, old, dir_, manifest);
   // Every folder of the run first, empty ones too (objects/ of a map without objects): a
   // symlink planted in its place is refused before anything of the old run is touched.

@@ -57,6 +57,10 @@ struct OutputFolderOptions {
   /// What the command reads (dataset folders or files, maps). DIR may not be one of them nor
   /// contain one (see refuse_output_over_inputs). Empty: nothing to check.
   std::vector<std::filesystem::path> inputs;
+  /// Relative paths the command will publish, as far as known before its work: one that DIR
+  /// already holds and this tool's manifest does not list (a user's mesh.ply) is refused when
+  /// the folder is opened, not after the work (publish refuses any other such file too).
+  std::vector<std::string> planned;
 };
 
 /// Throws semap::Error naming `out_dir` when it is one of `inputs` or contains one, symlinks

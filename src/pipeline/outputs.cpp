@@ -38,6 +38,13 @@ void write_map_outputs(const Mapper& mapper, const MapOutputs& outputs, const st
   mapper.save(dir / "map.semap", {{kGravitySection, encode_gravity_section(outputs.navigation.gravity)}});
 }
 
+const std::vector<std::string>& map_output_files() {
+  static const std::vector<std::string> files = {
+      "trajectory.txt", "mesh.ply",     "objects.json", "map.pgm",    "map.yaml",    "map_labels.png", "esdf.npy",
+      "esdf.yaml",      "scene_graph.json", "map.semap", "report.json", "report.html", "topdown.png"};
+  return files;
+}
+
 void write_map_outputs(const Mapper& mapper, const std::filesystem::path& dir) {
   const MapOutputs outputs = collect_outputs(mapper);
   write_map_outputs(mapper, outputs, dir);

@@ -350,7 +350,8 @@ RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
   // Never the dataset or the map to resume, nor a folder holding one (issue 44).
   std::vector<std::filesystem::path> inputs = {options.resume_from};
   if (!options.dataset_inside_out_dir) inputs.push_back(options.dataset);
-  OutputFolder out(options.out_dir, {.tool = "run", .publish_last = {"report.html", "report.json"}, .inputs = inputs});
+  OutputFolder out(options.out_dir, {.tool = "run", .publish_last = {"report.html", "report.json"}, .inputs = inputs,
+                                     .planned = map_output_files()});
   const DatasetReader* dataset = source->dataset();
   if (dataset && dataset->size() == 0) throw Error(options.dataset, "dataset has no frames");
   const bool poses_given = options.poses == PoseSource::groundtruth;

@@ -225,6 +225,30 @@ TEST(OutputFolder, PublishNeverReplacesAFileSemapDidNotWrite) {
   EXPECT_EQ(slurp(dir / "report.json"), "run 2");
 }
 
+// Issue 44: the outputs a command knows it will publish are checked when the folder is opened,
+// before the command's work, not only at publish; its own earlier outputs are no conflict.
+TEST(OutputFolder, PlannedOutputsAreCheckedWhenTheFolderIsOpened) {
+  test::TempDir tmp("semap_outfolder");
+  const fs::path dir = tmp / "out";
+  fs::create_directories(dir);
+  spit(dir / "mesh.ply", "the user's mesh");
+  spit(dir / "notes.txt", "the user's notes");
+  const auto before = tree(dir);
+  try {
+    OutputFolder out(dir, {.tool = "run", .inputs = {}, .planned = {"trajectory.txt", "mesh.ply"}});
+    ADD_FAILURE() << "opened a folder holding the user's mesh.ply";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("mesh.ply"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("not written by semap"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(tree(dir), before) << "a refused open leaves the folder as it was";
+  // Files the command will not write are the user's business; what semap wrote is its own.
+  fs::remove(dir / "mesh.ply");
+  publish_run(dir, {{"report.json", "{}"}, {"mesh.ply", "semap's"}});
+  OutputFolder again(dir, {.tool = "run", .inputs = {}, .planned = {"mesh.ply", "report.json"}});
+  EXPECT_EQ(slurp(dir / "notes.txt"), "the user's notes");
+}
+
 // Issue 44 class 4: DIR may not be an input nor hold one, by any path (symlink, "..").
 TEST(OutputFolder, RefusesAnOutputFolderThatIsOrContainsAnInput) {
   test::TempDir scratch("semap_outfolder");

@@ -5,8 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <set>
 
+#include "io/output_folder.hpp"
 #include "reliability/reliability_support.hpp"
+#include "semap/pipeline/outputs.hpp"
 
 namespace semap {
 namespace {
@@ -49,6 +52,11 @@ TEST_F(OutputSafety, RunRefusesTheDatasetOrAFolderHoldingItAsOut) {
 TEST_F(OutputSafety, MergeRefusesTheSameMapTwiceByAnyPath) {
   const fs::path map = path("map_a");
   ASSERT_EQ(run_semap(run_args(clean(), map)).exit_code, 0);
+  // The files the run published at the top of its folder are those it checks before mapping.
+  std::set<std::string> top_level;
+  for (const std::string& file : OutputFolder::read_manifest(map, "run"))
+    if (file.find('/') == std::string::npos) top_level.insert(file);
+  EXPECT_EQ(top_level, std::set<std::string>(map_output_files().begin(), map_output_files().end()));
   fs::create_directory_symlink(map, path("map_alias"));
   for (const fs::path& other : {map, path("map_alias"), map / "map.semap"}) {
     const auto r = run_semap({"merge", map.string(), other.string(), "--out", path("merged").string()});

@@ -9,6 +9,7 @@
 //   map.pgm, map.yaml, map_labels.png, esdf.npy, esdf.yaml, scene_graph.json  (issue 39,
 //                      pipeline/navigation_outputs.hpp)
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include "semap/objects/object_summary.hpp"
@@ -34,6 +35,10 @@ void write_map_outputs(const Mapper& mapper, const MapOutputs& outputs, const st
 /// report.html and topdown.png with the keys `semap run` writes (issue 43; the wall/fps/CPU
 /// figures that only a driver measures are null there, summary.driver says which wrote it).
 void write_map_outputs(const Mapper& mapper, const std::filesystem::path& dir);
+/// The files every write_map_outputs(mapper, dir) writes at the top of `dir` (objects/<id>.ply
+/// vary with the map and are not listed): `semap run` refuses an output folder holding one
+/// that semap did not write before it maps (issue 44), not after.
+const std::vector<std::string>& map_output_files();
 /// objects.json + objects/<id>.ply.
 void write_objects(const std::vector<ObjectSummary>& objects, const std::filesystem::path& dir);
 
