@@ -122,8 +122,9 @@ function buildMesh(ply) {
     const c = v / 255;
     toLinear[v] = c < 0.04045 ? c * 0.0773993808 : Math.pow(c * 0.9478672986 + 0.0521327014, 2.4);
   }
-  // Unlabelled vertices (palette black) show their RGB as light grey levels (shaded, never
-  // black), else mid grey. An all-black RGB channel carries no colour (e.g. colour integration
+  // Unlabelled vertices (palette black) show their RGB as dark-to-mid grey levels (shaded, never
+  // black, and darker than the pastel wall and ceiling colours so that labelled and unlabelled
+  // surfaces are told apart), else mid grey. An all-black RGB channel carries no colour (e.g. colour integration
   // off): ignore it. In RGB mode, a vertex whose voxel never saw colour is mid grey too.
   const hasRgb = Boolean(props.red && props.green && props.blue) &&
     (props.red.some((v) => v > 0) || props.green.some((v) => v > 0) || props.blue.some((v) => v > 0));
@@ -132,7 +133,7 @@ function buildMesh(ply) {
   for (let i = 0; i < n; ++i) {
     let c = classInfo(labels[i]).colour;
     if (labels[i] === 0) {
-      const grey = hasRgb ? Math.round(110 + 0.45 * luma(i)) : 150;
+      const grey = hasRgb ? Math.round(55 + 0.3 * luma(i)) : 100;
       c = [grey, grey, grey];
     }
     classColours[3 * i] = toLinear[c[0]];
@@ -242,7 +243,7 @@ function buildClassToggles(counts) {
     });
     const swatch = document.createElement('span');
     swatch.className = 'swatch';
-    swatch.style.background = cssColour(cls === 0 ? [170, 170, 170] : info.colour);  // unlabelled: shaded grey, as drawn
+    swatch.style.background = cssColour(cls === 0 ? [95, 95, 95] : info.colour);  // unlabelled: shaded grey, as drawn
     const name = document.createElement('span');
     name.className = 'class-name';
     name.textContent = info.name;
