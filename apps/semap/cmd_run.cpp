@@ -48,7 +48,7 @@ void add_run_command(CLI::App& app, CommandRunner& run) {
   cmd->add_option("--config", args->config_path, "YAML config (see `semap config --dump`)");
   cmd->add_option("--resume", args->options.resume_from,
                   "continue the map of an earlier run (its output folder or map.semap): relocalise into it and extend it");
-  add_enum_option(cmd, "--poses", args->options.poses, kPoseSourceNames, "camera poses");
+  add_enum_option(cmd, "--poses", args->options.poses, kRunPoseSourceNames, "camera poses");
   cmd->add_option("--segmenter", args->options.segmenter,
                   "yolo:MODEL | semantic:MODEL | panoptic:SEMANTIC.onnx+INSTANCE.onnx | groundtruth | precomputed:DIR | "
                   "none (geometry and colour only) | default (the default: the config's segmentation.segmenter, "

@@ -150,8 +150,12 @@ class Mapper {
   std::map<std::string, TimingSummary> timings() const;
   /// Adds a caller-side stage timing (e.g. "read") to timings().
   void add_timing(const std::string& stage, double ms);
-  /// The same, wall and CPU time since `start` (taken on the calling thread).
-  void add_timing(const std::string& stage, const StageStart& start);
+  /// The same, wall and CPU time since `start` (taken on the calling thread), of the work on
+  /// the frame `frame_index` (Frame::index) when it was one frame's.
+  void add_timing(const std::string& stage, const StageStart& start, std::optional<size_t> frame_index = std::nullopt);
+  /// Every timed call of every stage so far, with the frame it worked on: the per-frame stage
+  /// times of report.html (issue 43). A copy; thread-safe.
+  std::map<std::string, std::vector<StageSample>> stage_samples() const;
 
   const SemapConfig& config() const;
   const CameraModel& camera() const;

@@ -19,7 +19,7 @@ double ms_since(std::chrono::steady_clock::time_point start) {
 }  // namespace
 
 ObjectMapper::ObjectMapper(const ObjectsConfig& config, const CameraModel& camera)
-    : config_(config), segmenter_(config, camera), map_(config) {}
+    : config_(config), segmenter_(config, camera), map_(config), best_views_(camera.depth) {}
 
 void ObjectMapper::process(const Frame& frame, const SegmentationResult& segmentation, const Pose& T_world_camera) {
   ++step_;
@@ -33,6 +33,7 @@ void ObjectMapper::process(const Frame& frame, const SegmentationResult& segment
     ++timings_.optimisations;
   }
   timings_.association_ms += ms_since(t1);
+  best_views_.update(map_.instances(), frame, T_world_camera);
   ++timings_.frames;
 }
 
@@ -140,6 +141,7 @@ std::vector<ObjectSummary> ObjectMapper::summaries(const SurfaceProjection& onto
     for (size_t k = 0; k < shares.size(); ++k)
       if (shares[k] >= 0.005) o.class_distribution[std::string(class_name(static_cast<ClassId>(k)))] = shares[k];
     o.confidence = 1.0 - inst.mean_scores()[0];
+    o.best_view_jpeg = best_views_.jpeg(inst.id);
     exported_points(map_, inst, config_.points_on_surface ? onto_surface : SurfaceProjection{},
                     config_.drop_points_of_other_classes, o);
     // Boxes describe the object's body: its largest cluster, trimmed of stray points.

@@ -11,6 +11,7 @@
 
 #include "semap/core/camera.hpp"
 #include "semap/core/frame.hpp"
+#include "objects/best_views.hpp"
 #include "objects/frame_segmenter.hpp"
 #include "objects/object_map.hpp"
 #include "semap/objects/object_summary.hpp"
@@ -44,7 +45,8 @@ inline constexpr const char* kObjectsSection = "objects";
 class ObjectMapper {
  public:
   ObjectMapper(const ObjectsConfig& config, const CameraModel& camera);
-  /// One keyframe: C2 segments -> C4 association; C5 every optimise_every calls.
+  /// One keyframe: C2 segments -> C4 association; C5 every optimise_every calls; then each
+  /// object's best view so far (objects/best_views.hpp, ObjectSummary::best_view_jpeg).
   void process(const Frame& frame, const SegmentationResult& segmentation, const Pose& T_world_camera);
   /// A segmented frame that is not an object keyframe (config accumulate_between_keyframes;
   /// a no-op when off): its masks, back-projected, add points to the instances they overlap
@@ -94,6 +96,7 @@ class ObjectMapper {
   ObjectsConfig config_;
   FrameSegmenter segmenter_;
   ObjectMap map_;
+  BestViews best_views_;
   size_t step_ = 0;
   ObjectMapperTimings timings_;
   std::vector<OptimisationStats> optimisation_log_;

@@ -221,7 +221,7 @@ TrackedFrame Mapper::Impl::locate(const Frame& frame, const std::optional<Pose>&
     if (!is_valid_pose(*given, 1e-4)) throw Error("frame " + std::to_string(frame.index), "pose is not a rigid transform");
     item.T_world_camera = *given;
     if (config.tracking.depth_repair.enabled) item.frame.depth = repaired(frame.depth, frame.rgb, config.tracking);
-    timings.add("depth_repair", t0);
+    timings.add("depth_repair", t0, frame.index);
     return item;
   }
   std::lock_guard lock(tracker_mutex);
@@ -229,7 +229,7 @@ TrackedFrame Mapper::Impl::locate(const Frame& frame, const std::optional<Pose>&
   const TrackResult r = tracker->track(frame);
   item.held = r.status == TrackingStatus::lost && r.reference_keyframe < 0;
   result.tracking_ms = t0.wall_ms_since();
-  timings.add("tracking", t0);
+  timings.add("tracking", t0, frame.index);
   item.T_world_camera = r.T_world_camera;
   result.status = status_of(r);
   result.ransac_inliers = r.ransac_inliers;
@@ -343,7 +343,7 @@ void Mapper::Impl::fuse(TrackedFrame& item, const std::optional<SegmentationResu
   }
   archive_for_refresh(item);
   ++frames_fused;
-  timings.add("tsdf_integration", t0, workers_ms);
+  timings.add("tsdf_integration", t0, item.frame.index, workers_ms);
 }
 
 void Mapper::Impl::register_colour(Frame& frame) const {
@@ -367,11 +367,11 @@ void Mapper::Impl::map_objects(ObjectWork& work) {
   std::lock_guard lock(objects_mutex);
   if (!work.keyframe) {
     objects.accumulate(work.frame, work.segmentation, work.T_world_camera);
-    timings.add("object_accumulate", t0);
+    timings.add("object_accumulate", t0, work.frame.index);
     return;
   }
   objects.process(work.frame, work.segmentation, work.T_world_camera);
-  timings.add("object_map", t0);
+  timings.add("object_map", t0, work.frame.index);
   ++object_frames;
   objects_in_map = objects.instances().size();
 }
@@ -386,7 +386,7 @@ void Mapper::Impl::archive_for_refresh(const TrackedFrame& item) {
   } else {
     frame_archive.store(item.frame.index, item.frame.depth, config.tsdf.colour_layer ? item.frame.rgb : cv::Mat());
   }
-  timings.add("refresh_archive", t0);
+  timings.add("refresh_archive", t0, item.frame.index);
 }
 
 Trajectory Mapper::Impl::current_trajectory() const {
@@ -482,7 +482,7 @@ void Mapper::Impl::refresh_map(const Trajectory& optimised) {
     tsdf = std::move(rebuilt);
   }
   final_stats.map_refreshed = true;
-  timings.add("map_refresh", t0);
+  timings.add("map_refresh", t0, std::nullopt);
 }
 
 Mapper::Mapper(const SemapConfig& config, const CameraModel& camera, std::unique_ptr<Segmenter> segmenter) {
@@ -546,7 +546,7 @@ void Mapper::finish() {
       m.final_stats.local_edges = tracked.local_edges;
       m.final_stats.held_frames = tracked.held_frames;
     }
-    m.timings.add("pose_graph_final", t0);
+    m.timings.add("pose_graph_final", t0, std::nullopt);
     m.refresh_map(optimised);
     m.final_trajectory = std::move(optimised);
   } else {
@@ -561,7 +561,7 @@ void Mapper::finish() {
     m.final_stats.objects_created = counts.created;
     m.final_stats.objects_deleted = counts.deleted;
     m.final_stats.objects_merged = counts.merged;
-    m.timings.add("object_map_final", t0);
+    m.timings.add("object_map_final", t0, std::nullopt);
   }
   m.finished = true;
 }
@@ -661,7 +661,15 @@ std::map<std::string, TimingSummary> Mapper::timings() const {
 }
 
 void Mapper::add_timing(const std::string& stage, double ms) { impl_->timings.add(stage, ms); }
-void Mapper::add_timing(const std::string& stage, const StageStart& start) { impl_->timings.add(stage, start); }
+void Mapper::add_timing(const std::string& stage, const StageStart& start, std::optional<size_t> frame_index) {
+  impl_->timings.add(stage, start, frame_index);
+}
+
+std::map<std::string, std::vector<StageSample>> Mapper::stage_samples() const {
+  std::map<std::string, std::vector<StageSample>> out;
+  for (const std::string& stage : impl_->timings.stages()) out[stage] = impl_->timings.samples(stage);
+  return out;
+}
 
 const SemapConfig& Mapper::config() const { return impl_->config; }
 const CameraModel& Mapper::camera() const { return impl_->camera; }

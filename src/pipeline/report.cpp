@@ -1,6 +1,7 @@
 #include "pipeline/report.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -189,7 +190,39 @@ std::vector<ReportObject> report_objects(const std::vector<ObjectSummary>& objec
   return out;
 }
 
-nlohmann::json frames_json(const std::vector<FrameResult>& frames, const std::optional<AteResult>& ate) {
+namespace {
+
+/// Per stage that worked on frames: its milliseconds on each frame of `frames` (summed over its
+/// calls on that frame; null where it did not run), rounded to the microsecond.
+nlohmann::json stage_ms_per_frame(const std::vector<FrameResult>& frames,
+                                  const std::map<std::string, std::vector<StageSample>>& stage_samples) {
+  std::map<size_t, size_t> position;  // Frame::index -> position in `frames`
+  for (size_t i = 0; i < frames.size(); ++i) position.emplace(frames[i].frame_index, i);
+  nlohmann::json out = nlohmann::json::object();
+  for (const auto& [stage, samples] : stage_samples) {
+    std::vector<double> ms(frames.size(), 0.0);
+    std::vector<bool> ran(frames.size(), false);
+    for (const StageSample& sample : samples) {
+      if (!sample.frame_index) continue;
+      const auto it = position.find(*sample.frame_index);
+      if (it == position.end()) continue;  // e.g. a frame read but skipped (no ground-truth pose)
+      ms[it->second] += sample.wall_ms;
+      ran[it->second] = true;
+    }
+    if (std::none_of(ran.begin(), ran.end(), [](bool r) { return r; })) continue;  // run once, not per frame
+    nlohmann::json column = nlohmann::json::array();
+    for (size_t i = 0; i < ms.size(); ++i)
+      column.push_back(ran[i] ? nlohmann::json(std::round(ms[i] * 1000.0) / 1000.0) : nlohmann::json(nullptr));
+    out[stage] = std::move(column);
+  }
+  return out;
+}
+
+}  // namespace
+
+nlohmann::json frames_json(const std::vector<FrameResult>& frames,
+                           const std::map<std::string, std::vector<StageSample>>& stage_samples,
+                           const std::optional<AteResult>& ate) {
   nlohmann::json j = {{"timestamp_s", nlohmann::json::array()}, {"status", nlohmann::json::array()},
                       {"ransac_inliers", nlohmann::json::array()}, {"tracking_ms", nlohmann::json::array()},
                       {"add_frame_ms", nlohmann::json::array()}};
@@ -200,6 +233,7 @@ nlohmann::json frames_json(const std::vector<FrameResult>& frames, const std::op
     j["tracking_ms"].push_back(f.tracking_ms);
     j["add_frame_ms"].push_back(f.total_ms);
   }
+  j["stage_ms"] = stage_ms_per_frame(frames, stage_samples);
   if (!ate) return j;
   // ATE per frame where the frame's pose associated with ground truth (null elsewhere).
   std::map<double, double> error_by_time(ate->per_pose_error_m.begin(), ate->per_pose_error_m.end());
@@ -224,15 +258,16 @@ void write_run_report(const std::filesystem::path& dir, const RunResult& result,
   report["gravity"] = gravity_report_json(outputs.navigation.gravity);  // issue 39
   report["navigation"] = navigation_report_json(outputs.navigation);
   write_file_atomic(dir / "report.json", report.dump(2) + "\n");
-  write_report_html(dir, report, topdown_png,
-                    object_cards(outputs.objects, outputs.navigation.gravity.up_W, outputs.trajectory));
+  ReportPictures pictures{topdown_png, render_grid_picture(outputs.navigation.grid, outputs.trajectory),
+                          object_cards(outputs.objects, outputs.navigation.gravity.up_W, outputs.trajectory)};
+  write_report_html(dir, report, pictures);
 }
 
 
 RunResult library_run_result(const Mapper& mapper, const MapOutputs& outputs) {
   RunResult r;
   r.mapper = mapper.stats();
-  r.poses = r.mapper.external_poses ? PoseSource::groundtruth : PoseSource::track;
+  r.poses = r.mapper.external_poses ? PoseSource::given : PoseSource::track;  // the caller's poses, not ground truth
   r.frames_read = r.mapper.frames;
   r.mesh_vertices = outputs.mesh.vertices.size();
   r.mesh_triangles = outputs.mesh.triangles.size();
@@ -240,6 +275,7 @@ RunResult library_run_result(const Mapper& mapper, const MapOutputs& outputs) {
   r.threads = mapper.config().pipeline.threads;
   r.timings = mapper.timings();
   r.frames = mapper.frame_results();
+  r.stage_samples = mapper.stage_samples();
   r.peak_rss_mb = static_cast<double>(peak_rss_bytes()) / (1024.0 * 1024.0);
   r.driver_measured = false;
   return r;

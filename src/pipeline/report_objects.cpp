@@ -1,6 +1,7 @@
-// Object cards of report.html (issue 43): class, confidence, size and a thumbnail. The object
-// map keeps no camera crop per object, so the thumbnail is drawn from the object's own
-// coloured voxels (ObjectSummary::points/colours), seen level from the side the camera was on.
+// Object cards of report.html (issue 43): class, confidence, size and a thumbnail: the crop of
+// the keyframe that saw the object best (ObjectSummary::best_view_jpeg), or, for an object
+// without one, its own coloured voxels (ObjectSummary::points/colours) seen level from the
+// side the camera was on.
 #include <algorithm>
 #include <numeric>
 #include <opencv2/imgcodecs.hpp>
@@ -65,10 +66,16 @@ std::vector<ObjectCard> object_cards(const std::vector<ObjectSummary>& objects, 
                                      const Trajectory& trajectory, int thumbnail_px) {
   std::vector<ObjectCard> cards;
   for (const ObjectSummary& o : objects) {
-    ObjectCard card{o.id, std::string(class_name(o.class_id)), o.confidence, o.box.extent.cast<double>(), {}};
-    std::vector<uint8_t> png;
-    cv::imencode(".png", render_object(o, up_W, view_direction(o, up_W, trajectory), thumbnail_px), png);
-    card.thumbnail_png.assign(png.begin(), png.end());
+    ObjectCard card{o.id, std::string(class_name(o.class_id)), o.confidence, o.box.extent.cast<double>()};
+    if (!o.best_view_jpeg.empty()) {
+      card.thumbnail = o.best_view_jpeg;
+      card.thumbnail_mime = "image/jpeg";
+      card.thumbnail_source = ThumbnailSource::camera_crop;
+    } else {
+      std::vector<uint8_t> png;
+      cv::imencode(".png", render_object(o, up_W, view_direction(o, up_W, trajectory), thumbnail_px), png);
+      card.thumbnail.assign(png.begin(), png.end());
+    }
     cards.push_back(std::move(card));
   }
   std::sort(cards.begin(), cards.end(), [](const ObjectCard& a, const ObjectCard& b) {

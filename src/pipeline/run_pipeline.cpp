@@ -74,7 +74,7 @@ std::optional<LoadedFrame> pull_frame(FrameSource& source, Mapper& mapper, const
   try {
     std::optional<Frame> frame = source.next();
     if (!frame) return std::nullopt;
-    mapper.add_timing("read", t0);
+    mapper.add_timing("read", t0, frame->index);
     return LoadedFrame{std::move(frame)};
   } catch (const Error& e) {
     spdlog::warn("skipping a frame: {}", e.what());
@@ -354,6 +354,9 @@ RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
                                      .planned = map_output_files()});
   const DatasetReader* dataset = source->dataset();
   if (dataset && dataset->size() == 0) throw Error(options.dataset, "dataset has no frames");
+  if (!enum_value(kRunPoseSourceNames, enum_name(kPoseSourceNames, options.poses)))
+    throw Error(options.dataset, "semap run takes poses from tracking or the ground truth, not '" +
+                                     std::string(enum_name(kPoseSourceNames, options.poses)) + "'");
   const bool poses_given = options.poses == PoseSource::groundtruth;
   if (poses_given && !(dataset && dataset->has_ground_truth()))
     throw Error(options.dataset, "--poses groundtruth needs a ground-truth trajectory, this input has none");
@@ -392,6 +395,7 @@ RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
   result.threads = config.pipeline.threads;
   result.timings = mapper.timings();
   result.frames = mapper.frame_results();
+  result.stage_samples = mapper.stage_samples();
   result.fps_online = static_cast<double>(fed + skipped) / std::max(online_s, 1e-9);
   result.cpu_s_online = (mapped.cpu_ms_reading_ended - cpu_start_ms) * 1e-3;
   result.cpu_s_online_opencv_workers = (mapped.opencv_workers_ms_reading_ended - opencv_workers_start_ms) * 1e-3;
@@ -447,7 +451,7 @@ nlohmann::json to_json(const RunResult& r) {
   report["objects_per_class"] = r.objects_per_class;
   report["evaluation"] = to_json(r.evaluation);
   report["timings"] = timings_json(r.timings);
-  report["frames"] = frames_json(r.frames, r.evaluation.ate);
+  report["frames"] = frames_json(r.frames, r.stage_samples, r.evaluation.ate);
   if (!m.external_poses)
     report["tracking"] = {{"keyframes", m.keyframes}, {"lost_frames", m.lost_frames},
                           {"relocalisations", m.relocalisations}, {"loop_edges", m.loop_edges},

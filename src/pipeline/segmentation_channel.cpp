@@ -53,7 +53,7 @@ void SegmentationChannel::segment(Frame& frame) {
   try {
     SegmentationResult r = segmenter_->segment(frame);
     r.frame_index = frame.index;
-    timings_.add(options_.timing_name, t0);
+    timings_.add(options_.timing_name, t0, frame.index);
     results_.put(frame.index, std::move(r));
   } catch (const std::exception& e) {
     spdlog::warn("segmentation of {} failed: {}",

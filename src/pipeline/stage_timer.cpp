@@ -9,11 +9,11 @@
 
 namespace semap {
 
-void StageTimings::add(const std::string& stage, double ms) {
+void StageTimings::add(const std::string& stage, double ms, std::optional<size_t> frame_index) {
   std::lock_guard lock(mutex_);
   auto [it, inserted] = samples_.try_emplace(stage);
   if (inserted) order_.push_back(stage);
-  it->second.push_back(ms);
+  it->second.push_back({ms, frame_index});
 }
 
 StageStart StageStart::now() { return {std::chrono::steady_clock::now(), thread_and_helpers_cpu_ms()}; }
@@ -22,10 +22,11 @@ double StageStart::wall_ms_since() const {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - wall).count();
 }
 
-void StageTimings::add(const std::string& stage, const StageStart& start, double extra_cpu_ms) {
+void StageTimings::add(const std::string& stage, const StageStart& start, std::optional<size_t> frame_index,
+                       double extra_cpu_ms) {
   const double wall_ms = start.wall_ms_since();
   const double cpu_ms = thread_and_helpers_cpu_ms() - start.cpu_ms + extra_cpu_ms;
-  add(stage, wall_ms);
+  add(stage, wall_ms, frame_index);
   std::lock_guard lock(mutex_);
   auto& [count, total] = cpu_[stage];
   ++count;
@@ -37,7 +38,9 @@ TimingSummary StageTimings::summary(const std::string& stage) const {
   TimingSummary s;
   const auto it = samples_.find(stage);
   if (it == samples_.end() || it->second.empty()) return s;
-  std::vector<double> v = it->second;
+  std::vector<double> v;
+  v.reserve(it->second.size());
+  for (const StageSample& sample : it->second) v.push_back(sample.wall_ms);
   std::sort(v.begin(), v.end());
   s.count = v.size();
   s.total_ms = std::accumulate(v.begin(), v.end(), 0.0);
@@ -55,6 +58,12 @@ TimingSummary StageTimings::summary(const std::string& stage) const {
 std::vector<std::string> StageTimings::stages() const {
   std::lock_guard lock(mutex_);
   return order_;
+}
+
+std::vector<StageSample> StageTimings::samples(const std::string& stage) const {
+  std::lock_guard lock(mutex_);
+  const auto it = samples_.find(stage);
+  return it == samples_.end() ? std::vector<StageSample>{} : it->second;
 }
 
 size_t peak_rss_bytes() {

@@ -3,14 +3,19 @@
 // one-thread runs are byte-identical, bad input is a clean error.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
 #include "semap/core/error.hpp"
 #include "core/progress.hpp"
+#include "semap/io/dataset.hpp"
 #include "semap/io/trajectory_io.hpp"
+#include "semap/pipeline/outputs.hpp"
+#include "pipeline/report_sections.hpp"
 #include "semap/pipeline/run_pipeline.hpp"
 #include "synth/synth_config.hpp"
 #include "test_support.hpp"
@@ -74,6 +79,32 @@ class PipelineTest : public ::testing::Test {
 };
 test::TempDir* PipelineTest::dir_ = nullptr;
 
+/// Issue 43: report.json has each stage's time per frame for every stage that ran on frames
+/// (every timed stage but the final passes), one entry per frame, and report.html draws one
+/// strip with data per stage.
+void expect_stage_strips(const std::string& html, const nlohmann::json& report) {
+  const nlohmann::json& stage_ms = report["frames"]["stage_ms"];
+  const size_t frames = report["frames"]["status"].size();
+  for (auto it = report["timings"].begin(); it != report["timings"].end(); ++it) {
+    const bool final_pass = it.key() == "pose_graph_final" || it.key() == "object_map_final" || it.key() == "map_refresh";
+    EXPECT_EQ(stage_ms.contains(it.key()), !final_pass) << it.key();
+  }
+  for (auto it = stage_ms.begin(); it != stage_ms.end(); ++it) {
+    EXPECT_EQ(it->size(), frames) << it.key();
+    EXPECT_TRUE(std::any_of(it->begin(), it->end(), [](const auto& v) { return v.is_number(); })) << it.key();
+  }
+  const size_t at = html.find("<h2>Time of each stage per frame</h2>");
+  ASSERT_NE(at, std::string::npos);
+  const size_t end = html.find("</svg>", at);
+  ASSERT_NE(end, std::string::npos);
+  size_t strips = 0;
+  for (size_t p = html.find("class=\"datum\"", at); p < end; p = html.find("class=\"datum\"", p + 1)) ++strips;
+  EXPECT_EQ(strips, stage_ms.size()) << "one strip per stage timed per frame";
+  for (auto it = stage_ms.begin(); it != stage_ms.end(); ++it)
+    EXPECT_LT(html.find(">" + report::stage_label(it.key()) + "</text>", at), end) << "no strip named for " << it.key();
+  EXPECT_TRUE(stage_ms.contains("tsdf_integration"));
+}
+
 /// Issue 43: report.html reads without a network (no external URL, no script), every plot has
 /// drawn data, and no figure shows as NaN/null. Returns the HTML for further checks.
 std::string expect_readable_report(const std::filesystem::path& dir) {
@@ -102,6 +133,11 @@ std::string expect_readable_report(const std::filesystem::path& dir) {
   EXPECT_GE(plots, 3u) << "stage times, labelled area per class and objects per class";
   EXPECT_NE(html.find("<p class=\"summary\">Mapped "), std::string::npos);
   EXPECT_TRUE(std::filesystem::exists(dir / "topdown.png"));  // the one local image it shows
+  expect_stage_strips(html, nlohmann::json::parse(slurp(dir / "report.json")));
+  // Issue 39: the occupancy grid as a picture, with its legend.
+  EXPECT_NE(html.find("<img class=\"grid\" src=\"data:image/png;base64,"), std::string::npos) << "no grid picture";
+  for (const char* key : {">free (", ">unknown (", ">occupied, unlabelled<", "camera path"})
+    EXPECT_NE(html.find(key), std::string::npos) << "grid legend lacks " << key;
   return html;
 }
 
@@ -133,6 +169,41 @@ TEST_F(PipelineTest, ReportSaysWhyAFigureIsMissing) {
   const std::string html = expect_readable_report(out("tracked_report"));
   EXPECT_NE(html.find("the trajectory error (ATE) was not computed"), std::string::npos);
   EXPECT_NE(html.find("frames lost"), std::string::npos);  // tracked: the tracking sentence
+}
+
+// Issue 43: a library Mapper fed the caller's own poses (not `semap run --poses groundtruth`)
+// reports them as "given", and its objects carry their best camera view, a JPEG of at most
+// 96 px a side, which the report's cards show.
+TEST_F(PipelineTest, LibraryMapperReportsGivenPosesAndObjectViews) {
+  const auto dataset = open_dataset(data());
+  Mapper mapper(one_thread_config(), dataset->camera());
+  for (size_t i = 0; i < 40; ++i) {
+    const Frame frame = dataset->load(i);
+    FrameHints hints;
+    hints.T_world_camera = frame.gt_T_world_camera;
+    hints.segmentation = segmentation_from_label_images(frame.labels, frame.instances);
+    mapper.add_frame(frame, hints);
+  }
+  mapper.finish();
+  write_map_outputs(mapper, out("library_given"));
+  const nlohmann::json report = nlohmann::json::parse(slurp(out("library_given") / "report.json"));
+  EXPECT_EQ(report["summary"]["poses"], "given");
+  const std::vector<ObjectSummary> objects = mapper.objects();
+  ASSERT_FALSE(objects.empty());
+  size_t with_view = 0;
+  for (const ObjectSummary& o : objects) {
+    if (o.best_view_jpeg.empty()) continue;
+    ++with_view;
+    const cv::Mat view = cv::imdecode(std::vector<uint8_t>(o.best_view_jpeg.begin(), o.best_view_jpeg.end()), cv::IMREAD_COLOR);
+    ASSERT_FALSE(view.empty()) << "object " << o.id;
+    EXPECT_LE(std::max(view.cols, view.rows), 96) << "object " << o.id;
+    EXPECT_GE(std::min(view.cols, view.rows), 4) << "object " << o.id;
+  }
+  std::printf("%zu of %zu objects have a camera view\n", with_view, objects.size());
+  EXPECT_GE(with_view, objects.size() * 8 / 10) << "every object was seen by the keyframe that made it";
+  const std::string html = expect_readable_report(out("library_given"));
+  EXPECT_NE(html.find("src=\"data:image/jpeg;base64,"), std::string::npos);
+  EXPECT_NE(html.find("Poses were given (by the caller)"), std::string::npos);
 }
 
 TEST_F(PipelineTest, OneThreadRunsAreByteIdentical) {

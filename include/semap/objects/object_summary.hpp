@@ -33,6 +33,10 @@ struct ObjectSummary {
   int associations = 0;  ///< association count over the run (C5 s)
   size_t first_frame = 0, last_frame = 0;
   std::string state;     ///< new | stable
+  /// JPEG crop (longest side <= 96 px) of the keyframe that saw the object best: its largest
+  /// unoccluded view (objects/best_views.hpp); empty when none (e.g. a resumed map's object not
+  /// seen again). Shown by report.html, not written to objects.json.
+  std::string best_view_jpeg;
 };
 nlohmann::json to_json(const ObjectSummary& object);
 /// The objects.json document ({"objects": [...]}, schema in SHARED_FORMATS.md).

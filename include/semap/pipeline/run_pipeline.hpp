@@ -20,8 +20,14 @@ namespace semap {
 enum class PoseSource {
   track,        ///< semap tracks the camera (METHODS A1-A4)
   groundtruth,  ///< the dataset's ground-truth poses (frames without one are skipped)
+  given,        ///< the library caller's own poses (FrameHints); what report.json says for such a
+                ///< Mapper (write_map_outputs, Python mapper.save), not a `semap run` choice
 };
-inline constexpr EnumNames<PoseSource, 2> kPoseSourceNames{
+/// Every source, as report.json's summary.poses names it.
+inline constexpr EnumNames<PoseSource, 3> kPoseSourceNames{
+    {{PoseSource::track, "track"}, {PoseSource::groundtruth, "groundtruth"}, {PoseSource::given, "given"}}};
+/// The sources `semap run --poses` takes (RunOptions::poses).
+inline constexpr EnumNames<PoseSource, 2> kRunPoseSourceNames{
     {{PoseSource::track, "track"}, {PoseSource::groundtruth, "groundtruth"}}};
 
 struct RunOptions {
@@ -30,7 +36,7 @@ struct RunOptions {
   std::filesystem::path dataset;
   DatasetOptions dataset_options;  ///< e.g. the ROS bag topics
   std::filesystem::path out_dir;
-  PoseSource poses = PoseSource::track;
+  PoseSource poses = PoseSource::track;  ///< track or groundtruth (kRunPoseSourceNames)
   /// yolo:PATH | semantic:PATH | panoptic:SEM+INST | groundtruth | precomputed:DIR | none |
   /// default; empty: the config's segmentation.segmenter, whose default is "default": the
   /// default models (find_default_segmenter) when found, else none (geometry and colour only).
@@ -89,6 +95,8 @@ struct RunResult {
   Evaluation evaluation;
   std::map<std::string, TimingSummary> timings;
   std::vector<FrameResult> frames;  ///< Mapper::frame_results(): report.json "frames" (issue 43)
+  /// Mapper::stage_samples(): report.json "frames"/"stage_ms", each stage's time per frame.
+  std::map<std::string, std::vector<StageSample>> stage_samples;
 };
 nlohmann::json to_json(const RunResult& result);
 

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,19 +26,30 @@ struct StageStart {
   double wall_ms_since() const;
 };
 
+/// One timed call of a stage: its wall time and the frame it worked on (Frame::index; nullopt
+/// for work of no one frame, e.g. the final pass). report.html plots them per frame (issue 43).
+struct StageSample {
+  double wall_ms = 0.0;
+  std::optional<size_t> frame_index;
+};
+
+/// Every method is thread-safe (one mutex): stages on their own threads add concurrently.
 class StageTimings {
  public:
-  void add(const std::string& stage, double ms);
-  /// Wall and CPU time since `start` (same thread); extra_cpu_ms: CPU spent for this stage on
-  /// other threads (e.g. an integrator's own TBB arena).
-  void add(const std::string& stage, const StageStart& start, double extra_cpu_ms = 0.0);
+  void add(const std::string& stage, double ms, std::optional<size_t> frame_index = std::nullopt);
+  /// Wall and CPU time since `start` (same thread) of the work on `frame_index`; extra_cpu_ms:
+  /// CPU spent for this stage on other threads (e.g. an integrator's own TBB arena).
+  void add(const std::string& stage, const StageStart& start, std::optional<size_t> frame_index,
+           double extra_cpu_ms = 0.0);
   TimingSummary summary(const std::string& stage) const;
   std::vector<std::string> stages() const;  ///< in first-seen order
+  /// The stage's calls in the order they were added (a copy).
+  std::vector<StageSample> samples(const std::string& stage) const;
 
  private:
   mutable std::mutex mutex_;
   std::vector<std::string> order_;
-  std::map<std::string, std::vector<double>> samples_;
+  std::map<std::string, std::vector<StageSample>> samples_;
   std::map<std::string, std::pair<size_t, double>> cpu_;  ///< samples, total ms
 };
 
@@ -46,7 +58,7 @@ class ScopedStageTimer {
  public:
   ScopedStageTimer(StageTimings& timings, std::string stage)
       : timings_(timings), stage_(std::move(stage)), start_(StageStart::now()) {}
-  ~ScopedStageTimer() { timings_.add(stage_, start_); }
+  ~ScopedStageTimer() { timings_.add(stage_, start_, std::nullopt); }
 
  private:
   StageTimings& timings_;
