@@ -76,7 +76,8 @@ RegistrationCheck Odometry::check_features(const FrameFeatures& frame_features,
   for (int i : ransac.inliers) inlier_pixels.push_back(frame_features.keypoints[size_t(pairs[size_t(i)].first)].pt);
   check.occupied_cells = occupied_grid_cells(inlier_pixels, intr_.width, intr_.height, vp.spread_grid);
   check.spread_ok = check.occupied_cells >= vp.spread_min_cells;
-  check.runner_up_votes = ransac_runner_up(ransac, src, dst, cfg_.ransac.inlier_distance);
+  check.runner_up_votes = ransac_runner_up(ransac, src, dst, cfg_.ransac.inlier_distance,
+                                          int(std::ceil(vp.ambiguity_vote_ratio * ransac.best_votes)));
   check.ambiguous = check.runner_up_votes >= vp.ambiguity_vote_ratio * ransac.best_votes;
   return check;
 }

@@ -9,6 +9,7 @@ namespace semap {
 namespace {
 /// Depth of the sensor model's minimum noise (Nguyen et al. 2012, Kinect v1), metres.
 constexpr double kNoiseModelMinDepthM = 0.4;
+constexpr int kNeighbourhood[9][2] = {{0, 0}, {-1, 0}, {1, 0}, {0, -1}, {0, 1}, {-1, -1}, {1, -1}, {-1, 1}, {1, 1}};
 }  // namespace
 
 double depth_noise_sigma(double z_m, const VerificationParams& p) {
@@ -37,17 +38,16 @@ DenseResidual dense_depth_residual(const DepthLevel& frame, const DepthLevel& re
       // 3x3 neighbourhood: a one-pixel misregistration at a depth edge is not evidence.
       const double bound = params.residual_sigmas * depth_noise_sigma(q.z(), params) + params.residual_pose_tolerance_m;
       bool seen = false, agrees = false, in_front_all = true;
-      for (int dv = -1; dv <= 1 && !agrees; ++dv)
-        for (int du = -1; du <= 1 && !agrees; ++du) {
-          const int x = ur + du, y = vr + dv;
-          if (x < 0 || y < 0 || x >= ref.cols || y >= ref.rows) continue;
-          const float z_ref = ref.at<cv::Vec3f>(y, x)[2];
-          if (!std::isfinite(z_ref)) continue;
-          seen = true;
-          const double in_front = z_ref - q.z();  // > 0: between the reference camera and its surface
-          agrees = std::abs(in_front) <= bound;
-          in_front_all = in_front_all && in_front > bound;
-        }
+      for (int i = 0; i < 9 && !agrees; ++i) {
+        const int x = ur + kNeighbourhood[i][0], y = vr + kNeighbourhood[i][1];  // the centre first
+        if (x < 0 || y < 0 || x >= ref.cols || y >= ref.rows) continue;
+        const float z_ref = ref.at<cv::Vec3f>(y, x)[2];
+        if (!std::isfinite(z_ref)) continue;
+        seen = true;
+        const double in_front = z_ref - q.z();  // > 0: between the reference camera and its surface
+        agrees = std::abs(in_front) <= bound;
+        in_front_all = in_front_all && in_front > bound;
+      }
       if (!seen) continue;
       ++out.overlap;
       if (agrees) ++out.agreeing;
@@ -69,11 +69,11 @@ int occupied_grid_cells(const std::vector<cv::Point2f>& points, int width, int h
 }
 
 int ransac_runner_up(const RansacResult& ransac, const std::vector<Eigen::Vector3d>& src,
-                     const std::vector<Eigen::Vector3d>& dst, double inlier_distance_m) {
+                     const std::vector<Eigen::Vector3d>& dst, double inlier_distance_m, int min_votes) {
   const double max_sq = inlier_distance_m * inlier_distance_m;
   int runner_up = 0;
   for (const auto& [votes, T] : ransac.hypotheses) {
-    if (votes <= runner_up) continue;
+    if (votes <= runner_up || votes < min_votes) continue;
     int shared = 0;  // the model's votes from the result's inliers
     for (int i : ransac.inliers) shared += (T * src[size_t(i)] - dst[size_t(i)]).squaredNorm() < max_sq;
     if (2 * shared < votes) runner_up = votes;

@@ -67,9 +67,9 @@ int occupied_grid_cells(const std::vector<cv::Point2f>& points, int width, int h
 /// Votes of the best sampled RANSAC model that is distinct from the result (0 when none):
 /// fewer than half of its votes come from the result's inliers, so it explains the frame with
 /// other matches (repetitive structure matched to the wrong copy). `src`, `dst`: the matched
-/// points RANSAC ran on.
+/// points RANSAC ran on; models with fewer than `min_votes` are not looked at (cost).
 int ransac_runner_up(const RansacResult& ransac, const std::vector<Eigen::Vector3d>& src,
-                     const std::vector<Eigen::Vector3d>& dst, double inlier_distance_m);
+                     const std::vector<Eigen::Vector3d>& dst, double inlier_distance_m, int min_votes = 0);
 
 /// Point-to-plane information sum J^T J, J = (p x n, n), of a pyramid level's own vertices and
 /// normals (rotation, translation order): how well the level's geometry constrains a pose.
