@@ -4,13 +4,16 @@
 //   bench_tracking [DATASET_DIR] [--frames N] [--no-open3d] [--no-repair-compare]
 //                  [--no-loop-compare] [--deterministic] [--out-trajectory FILE] [--threads N]
 //                  [--set "key: value"]... (tracking parameters, YAML, as in the tracking: section)
-//   bench_tracking --k-table [--steps 1,3,5,10|none] [--no-keyframe-rate] [--deterministic] [--no-open3d: no baselines] [--set ...]
+//   bench_tracking --k-table [--steps 1,3,5,10|none] [--no-keyframe-rate] [--deterministic] [--no-open3d: no baselines]
+//                  [--compare-verify: also ours with tracking.verify.enabled false, the pre-issue-42 judgement] [--set ...]
 //     issue 16: every k-th frame of tum_fr1_rpy and 7scenes_redkitchen (TUM-layout slices of
 //     links in a temp dir, tests/sequence_slices), ATE / RPE / lost / ms per frame of ours,
 //     Open3D's and OpenCV's (cv::rgbd::RgbdICPOdometry) odometry on the same frames: a text
 //     table on stderr, JSON on stdout. Issue 42: plus a keyframe-rate row per sequence (k "kf":
 //     frames at least 25 cm or 20 deg apart by the ground truth, tests/sequence_slices
 //     frames_by_motion, as a robot recording at 1-2 Hz gives); --no-keyframe-rate leaves it out.
+//     Each row also prints how often each registration check failed (dense residual / spread /
+//     ambiguous / under-constrained of the verified registrations).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -106,6 +109,10 @@ json run_ours(const std::vector<Frame>& frames, const CameraModel& camera, const
   j["lost_frames"] = lost;
   j["relocalised_frames"] = reloc;
   j["motion_prior_frames"] = prior;
+  // Issue 42: how often each verification check failed on the registration to the reference.
+  j["checks"] = {{"verified", s.verified_registrations}, {"dense_residual_failed", s.dense_residual_failed},
+                 {"spread_failed", s.spread_failed}, {"ambiguous", s.ambiguous_matches},
+                 {"under_constrained", s.under_constrained}};
   if (out_traj) *out_traj = traj;
   return j;
 }
@@ -153,7 +160,18 @@ std::string cell(const json& j, const char* lost_key) {
 }
 
 /// Issue 16: the k-table (every k-th frame of both shared sequences, ours beside the baselines).
-int run_k_table(const std::vector<size_t>& steps, const TrackingConfig& config, bool baselines, bool keyframe_rate) {
+/// "dense/spread/ambiguous/under-constrained of verified" firing counts of a run (issue 42).
+std::string check_counts(const json& ours) {
+  const json& c = ours["checks"];
+  char buf[96];
+  std::snprintf(buf, sizeof(buf), "%zu/%zu/%zu/%zu of %zu", c["dense_residual_failed"].get<size_t>(),
+                c["spread_failed"].get<size_t>(), c["ambiguous"].get<size_t>(), c["under_constrained"].get<size_t>(),
+                c["verified"].get<size_t>());
+  return buf;
+}
+
+int run_k_table(const std::vector<size_t>& steps, const TrackingConfig& config, bool baselines, bool keyframe_rate,
+                bool compare_verify) {
   namespace fs = std::filesystem;
   const fs::path tmp = fs::temp_directory_path() / ("semap_bench_slices_" + std::to_string(::getpid()));
   json report = json::array();
@@ -185,6 +203,11 @@ int run_k_table(const std::vector<size_t>& steps, const TrackingConfig& config, 
       json row = {{"sequence", name}, {"k", k}, {"frames", frames.size()}};
       if (k == "kf") row["source_frames"] = slice.source_index;
       row["ours"] = run_ours(frames, reader->camera(), config, gt, nullptr);
+      if (compare_verify) {  // issue 42: the same frames with the registration checks off (before)
+        TrackingConfig unverified = config;
+        unverified.verify.enabled = false;
+        row["ours_unverified"] = run_ours(frames, reader->camera(), unverified, gt, nullptr);
+      }
       std::string o3 = "n/a", ocv = "n/a";
 #ifdef SEMAP_HAVE_OPEN3D
       if (baselines) {
@@ -198,8 +221,12 @@ int run_k_table(const std::vector<size_t>& steps, const TrackingConfig& config, 
         ocv = cell(row["opencv_rgbd_icp"], "failures");
       }
 #endif
-      std::fprintf(stderr, "%-20s %3s %6zu | %s | %s | %s\n", name.c_str(), k.c_str(), frames.size(),
-                   cell(row["ours"], "lost_frames").c_str(), o3.c_str(), ocv.c_str());
+      std::fprintf(stderr, "%-20s %3s %6zu | %s | %s | %s | checks d/s/a/u %s\n", name.c_str(), k.c_str(), frames.size(),
+                   cell(row["ours"], "lost_frames").c_str(), o3.c_str(), ocv.c_str(), check_counts(row["ours"]).c_str());
+      if (compare_verify)
+        std::fprintf(stderr, "%-20s %3s %6zu | %s | (checks off; CPU ms/frame %.1f on, %.1f off)\n", "  unverified", k.c_str(),
+                     frames.size(), cell(row["ours_unverified"], "lost_frames").c_str(),
+                     row["ours"]["cpu_ms_per_frame"].get<double>(), row["ours_unverified"]["cpu_ms_per_frame"].get<double>());
       report.push_back(row);
       fs::remove_all(tmp / (name + k));
     }
@@ -216,7 +243,7 @@ int main(int argc, char** argv) {
     std::string dataset = std::string(SEMAP_SHARED_DIR) + "/data/tum_fr1_rpy";
     size_t max_frames = 0;
     bool open3d = true, repair_compare = true, loop_compare = true, deterministic = false, k_table = false;
-    bool keyframe_rate = true;
+    bool keyframe_rate = true, compare_verify = false;
     std::vector<size_t> steps = {1, 3, 5, 10};
     std::string out_trajectory;
     std::vector<std::string> overrides;
@@ -230,6 +257,7 @@ int main(int argc, char** argv) {
       else if (a == "--k-table") k_table = true;
       else if (a == "--steps" && i + 1 < argc) steps = std::string(argv[i + 1]) == "none" ? (++i, std::vector<size_t>{}) : parse_steps(argv[++i]);
       else if (a == "--no-keyframe-rate") keyframe_rate = false;
+      else if (a == "--compare-verify") compare_verify = true;
       else if (a == "--verbose") verbose = true;
       else if (a == "--threads" && i + 1 < argc) cv::setNumThreads(std::stoi(argv[++i]));  // OpenCV/TBB workers
       else if (a == "--out-trajectory" && i + 1 < argc) out_trajectory = argv[++i];
@@ -242,7 +270,7 @@ int main(int argc, char** argv) {
       config.background_loop_closure = !deterministic;
       for (const auto& o : overrides) load_config_string(o, "--set", [&](ParamVisitor& v) { config.visit(v); });
       config.validate();
-      return run_k_table(steps, config, open3d, keyframe_rate);
+      return run_k_table(steps, config, open3d, keyframe_rate, compare_verify);
     }
     auto reader = open_dataset(dataset);
     const size_t n = max_frames ? std::min(max_frames, reader->size()) : reader->size();

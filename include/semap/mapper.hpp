@@ -102,6 +102,9 @@ struct MapperStats {
   bool external_poses = false;        ///< the caller gave the poses
   size_t resumed_keyframes = 0;       ///< keyframes of the saved map this Mapper continues (load())
   size_t held_frames = 0;             ///< frames held (not fused, no pose) before relocalising into it
+  /// Issue 42: registrations verified, and how often each check failed (TrackerStats).
+  size_t verified_registrations = 0, dense_residual_failed = 0, spread_failed = 0, ambiguous_matches = 0,
+         under_constrained = 0;
   std::string segmenter = "none";
 };
 

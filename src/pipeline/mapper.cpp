@@ -629,6 +629,11 @@ MapperStats Mapper::stats() const {
     s.optimisations = t.optimisations;
     s.resumed_keyframes = t.resumed_keyframes;
     s.held_frames = t.held_frames;
+    s.verified_registrations = t.verified_registrations;
+    s.dense_residual_failed = t.dense_residual_failed;
+    s.spread_failed = t.spread_failed;
+    s.ambiguous_matches = t.ambiguous_matches;
+    s.under_constrained = t.under_constrained;
   }
   s.frames_fused = m.frames_fused;
   s.segmented_frames = m.primary_channel->segmented();

@@ -455,7 +455,10 @@ nlohmann::json to_json(const RunResult& r) {
   if (!m.external_poses)
     report["tracking"] = {{"keyframes", m.keyframes}, {"lost_frames", m.lost_frames},
                           {"relocalisations", m.relocalisations}, {"loop_edges", m.loop_edges},
-                          {"optimisations", m.optimisations}};
+                          {"optimisations", m.optimisations},
+                          {"checks", {{"verified", m.verified_registrations}, {"dense_residual_failed", m.dense_residual_failed},
+                                      {"spread_failed", m.spread_failed}, {"ambiguous", m.ambiguous_matches},
+                                      {"under_constrained", m.under_constrained}}}};
   if (m.resumed_keyframes > 0)  // issue 19: how this recording joined the saved map
     report["resumed"] = {{"saved_keyframes", m.resumed_keyframes}, {"held_frames", m.held_frames}};
   if (r.not_merged) report["resumed"] = {{"merged", false}, {"why", "no frame relocalised into the saved map"}};

@@ -188,7 +188,9 @@ bool LoopCloser::add_loop_edges(const Keyframe& kf, const std::function<const st
     const auto other_pyramid = odometry_.pyramid(other->depth, other->gray);
     const OdometryResult reg = odometry_.register_to(kf.features, kf_pyramid(), other->features, other_pyramid, nullptr,
                                                      uint32_t(cfg_.seed) + uint32_t(kf.id) * 7919u);
-    if (!reg.ok || reg.icp.rmse > cfg_.loop_max_icp_rmse || reg.icp.overlap < cfg_.loop_min_overlap) continue;
+    // The dense depth residual too (issue 42): a wrong loop edge pulls the whole graph.
+    if (!reg.ok || !reg.check.dense_ok || reg.icp.rmse > cfg_.loop_max_icp_rmse || reg.icp.overlap < cfg_.loop_min_overlap)
+      continue;
     std::lock_guard<std::mutex> lock(mutex_);
     const Pose current = vertices_.at(other->id).T_world.inverse() * vertices_.at(kf.id).T_world;
     if ((current.translation() - reg.T_kf_frame.translation()).norm() > cfg_.loop_max_pose_disagreement) continue;

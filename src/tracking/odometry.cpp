@@ -63,14 +63,66 @@ Matrix6d Odometry::information(const IcpResult& icp) const {
                               std::max(icp.rmse, cfg_.information_min_sigma), cfg_.information_effective_points);
 }
 
-/// Judges an ICP result from the registration's own evidence (issue 16): converged with
-/// acceptable residual and overlap; trusted when a well-supported RANSAC estimate agrees
-/// with it, else it must be plausible against the prior (without a prior: not accepted).
-void Odometry::judge(OdometryResult& reg, const RansacResult& ransac, bool trusted, const Pose* prior) const {
+/// Spread and second-model checks of a RANSAC estimate (issue 42): once per registration.
+RegistrationCheck Odometry::check_features(const FrameFeatures& frame_features,
+                                           const std::vector<std::pair<int, int>>& pairs,
+                                           const std::vector<Eigen::Vector3d>& src,
+                                           const std::vector<Eigen::Vector3d>& dst, const RansacResult& ransac) const {
+  RegistrationCheck check;
+  const VerificationParams& vp = cfg_.verify;
+  if (!vp.enabled || !ransac.ok) return check;
+  std::vector<cv::Point2f> inlier_pixels;
+  inlier_pixels.reserve(ransac.inliers.size());
+  for (int i : ransac.inliers) inlier_pixels.push_back(frame_features.keypoints[size_t(pairs[size_t(i)].first)].pt);
+  check.occupied_cells = occupied_grid_cells(inlier_pixels, intr_.width, intr_.height, vp.spread_grid);
+  check.spread_ok = check.occupied_cells >= vp.spread_min_cells;
+  check.runner_up_votes = ransac_runner_up(ransac, src, dst, cfg_.ransac.inlier_distance,
+                                          int(std::ceil(vp.ambiguity_vote_ratio * ransac.best_votes)));
+  check.ambiguous = check.runner_up_votes >= vp.ambiguity_vote_ratio * ransac.best_votes;
+  return check;
+}
+
+/// Dense depth residual and conditioning of an ICP result (issue 42).
+void Odometry::verify(OdometryResult& reg, const Evidence& ev) const {
+  const VerificationParams& vp = cfg_.verify;
+  reg.check = ev.feature_check;
+  if (!vp.enabled || reg.icp.matched == 0) return;
+  reg.check.evaluated = true;
+  const size_t level = size_t(std::min<int>(vp.residual_level, int(ev.frame_pyramid->size()) - 1));
+  const DenseResidual dense =
+      dense_depth_residual((*ev.frame_pyramid)[level], (*ev.kf_pyramid)[level], reg.icp.T_target_source, vp);
+  reg.check.consistent_fraction = dense.consistent_fraction();
+  reg.check.dense_overlap = dense.overlap_fraction();
+  reg.check.dense_points = dense.overlap;
+  reg.check.agreeing_share = dense.agreeing_share();
+  reg.check.dense_ok = reg.check.consistent_fraction >= vp.min_consistent_fraction &&
+                       reg.check.agreeing_share >= vp.min_agreeing_share;
+}
+
+/// Conditioning of the frame's geometry (issue 42), at the coarsest pyramid level (its normals
+/// are smooth enough to tell one plane from a room; level 0's are mostly Kinect noise).
+void Odometry::check_conditioning(OdometryResult& reg, const Evidence& ev) const {
+  reg.check.conditioning_evaluated = true;
+  reg.check.min_information_eigenvalue = scaled_min_information_eigenvalue(point_to_plane_information(ev.frame_pyramid->back()));
+  reg.check.well_conditioned = reg.check.min_information_eigenvalue >= cfg_.verify.min_information_eigenvalue;
+}
+
+/// Judges an ICP result (issue 16, verified as issue 42 asks): converged with acceptable
+/// residual and overlap, and its dense depth residual agrees; trusted when a well-supported,
+/// spread, unambiguous RANSAC estimate agrees with it, else it must be plausible against the
+/// prior and the frame's geometry well conditioned (without a prior: not accepted).
+void Odometry::judge(OdometryResult& reg, const Evidence& ev, const Pose* prior) const {
   reg.T_kf_frame = reg.icp.T_target_source;
   reg.ok = icp_acceptable(reg.icp, cfg_.loss_max_icp_rmse, cfg_.loss_min_overlap);
-  reg.feature_supported = trusted && pose_distance(ransac.T, reg.T_kf_frame) <= cfg_.ransac.icp_agreement;
-  reg.accepted = reg.ok && (reg.feature_supported || (prior && plausible(*prior, reg.T_kf_frame)));
+  if (reg.ok) verify(reg, ev);
+  reg.feature_supported = ev.trusted && pose_distance(ev.ransac->T, reg.T_kf_frame) <= cfg_.ransac.icp_agreement;
+  bool prior_supported = prior && plausible(*prior, reg.T_kf_frame);
+  // Only a pose the features do not pin down needs the geometry to (computed only then: cost).
+  if (reg.ok && reg.check.dense_ok && !reg.feature_supported && prior_supported && reg.check.evaluated) {
+    check_conditioning(reg, ev);
+    prior_supported = reg.check.well_conditioned;
+  }
+  reg.accepted = reg.ok && reg.check.dense_ok && (reg.feature_supported || prior_supported);
 }
 
 /// The wide-baseline ICP gate: grows with how far the start may be off (the prior's own step).
@@ -100,20 +152,25 @@ OdometryResult Odometry::register_to(const FrameFeatures& frame_features, const 
   rp.seed = seed;
   const RansacResult ransac = ransac_rigid(src, dst, rp);
   reg.inliers = ransac.ok ? int(ransac.inliers.size()) : 0;
-  const bool trusted = ransac.ok && reg.inliers >= cfg_.ransac.trusted_inliers &&
-                       reg.inliers >= cfg_.ransac.trusted_ratio * reg.matches;
+  Evidence ev;
+  ev.ransac = &ransac;
+  ev.feature_check = check_features(frame_features, pairs, src, dst, ransac);
+  ev.trusted = ransac.ok && reg.inliers >= cfg_.ransac.trusted_inliers &&
+               reg.inliers >= cfg_.ransac.trusted_ratio * reg.matches && ev.feature_check.features_trustworthy();
+  ev.frame_pyramid = &frame_pyramid;
+  ev.kf_pyramid = &kf_pyramid;
   reg.ransac_ms = ms_since(t0);
   t0 = Clock::now();
   const IcpParams& params = wide ? wide_icp_params_ : icp_params_;
   if (ransac.ok) {
     reg.icp = icp_point_to_plane(frame_pyramid, kf_pyramid, ransac.T, params);
-    judge(reg, ransac, trusted, prior);
+    judge(reg, ev, prior);
   }
   // RANSAC on a few bad matches can mislead ICP; the prior is the second chance.
   if (!reg.accepted && prior) {
     OdometryResult second = reg;
     second.icp = icp_point_to_plane(frame_pyramid, kf_pyramid, *prior, wide ? wide_params(prior_step_m) : icp_params_);
-    judge(second, ransac, trusted, prior);
+    judge(second, ev, prior);
     second.used_prior = true;
     if (second.accepted || !ransac.ok) reg = second;
   }

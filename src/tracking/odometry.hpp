@@ -10,20 +10,24 @@
 #include "semap/core/pose.hpp"
 #include "semap/tracking/tracking_config.hpp"
 #include "tracking/registration.hpp"
+#include "tracking/registration_check.hpp"
 
 namespace semap {
 
 /// Outcome of registering a frame against a keyframe (A2).
 struct OdometryResult {
   bool ok = false;                 ///< ICP converged with acceptable residual and overlap
-  bool feature_supported = false;  ///< trusted RANSAC estimate that the ICP result agrees with
-  bool accepted = false;           ///< ok, and feature-supported or plausible against the prior
+  bool feature_supported = false;  ///< trusted RANSAC estimate (spread, unambiguous) that the ICP result agrees with
+  /// ok, the dense residual agrees, and feature-supported or (well conditioned and plausible
+  /// against the prior) (issue 42: verified before it is trusted)
+  bool accepted = false;
   Pose T_kf_frame = Pose::Identity();  ///< the pose: frame camera in the keyframe's camera
   int matches = 0;                 ///< ORB matches
   int inliers = 0;                 ///< voting-RANSAC inliers (0 when RANSAC failed)
   bool used_prior = false;         ///< ICP started from the motion prior
   IcpResult icp;                   ///< the ICP that gave T_kf_frame (residual, overlap, Hessian)
   Matrix6d information = Matrix6d::Zero();  ///< of T_kf_frame, as a pose-graph edge (A4)
+  RegistrationCheck check;         ///< the verification of T_kf_frame (issue 42)
   double ransac_ms = 0, icp_ms = 0;
   double overlap() const { return icp.overlap; }  ///< matched fraction of the frame's points
   double residual_m() const { return icp.rmse; }  ///< ICP point-to-plane RMSE, metres
@@ -72,7 +76,20 @@ class Odometry {
   const TrackingConfig& config() const { return cfg_; }
 
  private:
-  void judge(OdometryResult& reg, const RansacResult& ransac, bool trusted, const Pose* prior) const;
+  /// What the checks of one register_to() share: the RANSAC model's own checks and the pyramids.
+  struct Evidence {
+    const RansacResult* ransac = nullptr;
+    bool trusted = false;  ///< enough inliers, spread and unambiguous
+    RegistrationCheck feature_check;  ///< spread and second-model results
+    const std::vector<DepthLevel>* frame_pyramid = nullptr;
+    const std::vector<DepthLevel>* kf_pyramid = nullptr;
+  };
+  RegistrationCheck check_features(const FrameFeatures& frame_features, const std::vector<std::pair<int, int>>& pairs,
+                                   const std::vector<Eigen::Vector3d>& src, const std::vector<Eigen::Vector3d>& dst,
+                                   const RansacResult& ransac) const;
+  void verify(OdometryResult& reg, const Evidence& evidence) const;
+  void check_conditioning(OdometryResult& reg, const Evidence& evidence) const;
+  void judge(OdometryResult& reg, const Evidence& evidence, const Pose* prior) const;
   IcpParams wide_params(double expected_error_m) const;
 
   TrackingConfig cfg_;

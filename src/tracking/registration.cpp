@@ -93,6 +93,7 @@ RansacResult ransac_rigid(const std::vector<Eigen::Vector3d>& src, const std::ve
     if (!ok) continue;
     int votes = 0;
     for (int i = 0; i < n; ++i) votes += (t * src[i] - dst[i]).squaredNorm() < max_sq;
+    if (votes >= params.min_inliers) best.hypotheses.emplace_back(votes, t);
     if (votes > best_votes) {
       best_votes = votes;
       best_t = t;
@@ -117,6 +118,7 @@ RansacResult ransac_rigid(const std::vector<Eigen::Vector3d>& src, const std::ve
     inliers = std::move(again);
   }
   best.T = t;
+  best.best_votes = best_votes;
   best.inliers = count_inliers(src, dst, t, params.inlier_distance, &best.inlier_rmse);
   best.ok = int(best.inliers.size()) >= params.min_inliers;
   return best;

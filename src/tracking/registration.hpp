@@ -26,6 +26,10 @@ struct RansacResult {
   Pose T = Pose::Identity();       ///< dst ~ T * src
   std::vector<int> inliers;        ///< indices into the pairs
   double inlier_rmse = 0.0;        ///< metres
+  int best_votes = 0;              ///< votes of the best sampled model (before the refit)
+  /// Every sampled model with at least min_inliers votes (votes, model): the second hypotheses
+  /// a match is checked against (issue 42, registration_check.hpp ransac_runner_up).
+  std::vector<std::pair<int, Pose>> hypotheses;
 };
 /// Voting RANSAC (METHODS.md A2 step 3): 3-pair samples, Kabsch, inlier votes under a distance
 /// threshold, best hypothesis refit on all its inliers (twice). Deterministic for a seed.

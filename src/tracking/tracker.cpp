@@ -146,15 +146,30 @@ struct Tracker::Impl {
     return wide.accepted ? wide : reg;
   }
 
-  void report_registration(const OdometryResult& reg, const Pose& prior, size_t frame_index, TrackResult& result) const {
+  void report_registration(const OdometryResult& reg, const Pose& prior, size_t frame_index, TrackResult& result) {
     result.feature_matches = reg.matches;
+    result.check = reg.check;
+    count_checks(reg.check);
     result.ransac_inliers = reg.inliers;
     result.used_motion_prior = reg.used_prior;
     if (std::getenv("SEMAP_TRACKING_DEBUG"))
-      std::fprintf(stderr, "[tracker] frame %zu ref %d ok %d acc %d sup %d conv %d rmse %.4f overlap %.3f matches %d inliers %d prior %d prior_t %.3f reg_t %.3f\n",
+      std::fprintf(stderr, "[tracker] frame %zu ref %d ok %d acc %d sup %d conv %d rmse %.4f overlap %.3f matches %d inliers %d prior %d prior_t %.3f reg_t %.3f dense %.3f/%.3f/%.3f cells %d votes %d/%d eig %.4f\n",
                    frame_index, reference, int(reg.ok), int(reg.accepted), int(reg.feature_supported),
                    int(reg.icp.converged), reg.icp.rmse, reg.icp.overlap, reg.matches, reg.inliers, int(reg.used_prior),
-                   prior.translation().norm(), reg.T_kf_frame.translation().norm());
+                   prior.translation().norm(), reg.T_kf_frame.translation().norm(), reg.check.consistent_fraction,
+                   reg.check.agreeing_share, reg.check.dense_overlap, reg.check.occupied_cells, reg.check.runner_up_votes, reg.inliers,
+                   reg.check.min_information_eigenvalue);
+  }
+
+  /// Issue 42: how often each verification check fails (TrackerStats).
+  void count_checks(const RegistrationCheck& check) {
+    if (!check.evaluated) return;
+    std::lock_guard<std::mutex> lock(frames_mutex);
+    ++counters.verified_registrations;
+    counters.dense_residual_failed += !check.dense_ok;
+    counters.spread_failed += !check.spread_ok;
+    counters.ambiguous_matches += check.ambiguous;
+    counters.under_constrained += check.conditioning_evaluated && !check.well_conditioned;
   }
 
   /// A lost frame against the keyframe database (A3); on success the reference changes.

@@ -19,6 +19,7 @@
 #include "semap/core/pose.hpp"
 #include "semap/tracking/tracking_config.hpp"
 #include "tracking/registration.hpp"
+#include "tracking/registration_check.hpp"
 
 namespace semap {
 
@@ -43,6 +44,7 @@ struct TrackResult {
   int icp_matched = 0;
   double icp_rmse = 0.0;                   ///< metres
   double icp_overlap = 0.0;                ///< matched fraction of the frame's points
+  RegistrationCheck check;                 ///< verification of the registration to the reference (issue 42)
   cv::Mat depth;                           ///< depth used for tracking (repaired when enabled), CV_32FC1 metres
   TrackTimings timings;
   /// The pose passed its checks (tracked or relocalised); a frame without a verified pose must
@@ -62,6 +64,10 @@ struct TrackerStats {
   size_t loop_edges = 0, local_edges = 0, keyframe_reuses = 0, optimisations = 0;
   size_t resumed_keyframes = 0;  ///< keyframes of the map this tracker continues (resume())
   size_t held_frames = 0;        ///< frames of a resumed map before the first relocalisation
+  /// Issue 42: frames whose registration to the reference was verified, and how often each
+  /// check failed on it (registration_check.hpp).
+  size_t verified_registrations = 0, dense_residual_failed = 0, spread_failed = 0, ambiguous_matches = 0,
+         under_constrained = 0;
 };
 
 struct TrackerState;  // tracking/tracker_state.hpp

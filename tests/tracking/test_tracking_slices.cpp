@@ -83,6 +83,74 @@ TEST(TrackingSlices, TumFr1RpyEvery3rdFrame) {
   EXPECT_LE(run.lost, 2u);
 }
 
+// Issue 42: keyframe-rate slices, frames at least 25 cm or 20 deg apart by the ground truth (a
+// robot recording at 1-2 Hz). A frame may be lost, but a pose the tracker verified must be
+// right: each verified frame's motion from the previous verified frame within 10 cm / 5 deg of
+// the ground truth's (a wrong registration is off by tens of centimetres, issue 42).
+struct KeyframeRateRun {
+  size_t frames = 0, lost = 0, wrong_verified = 0;
+  double ate_rmse_m = 0;
+};
+
+KeyframeRateRun run_keyframe_rate(const std::filesystem::path& source) {
+  test::TempDir tmp("semap_kf_slice");
+  test::SliceSpec spec;
+  spec.frames = test::frames_by_motion(source, 0.25, 20.0);
+  const test::SequenceSlice slice = test::write_sequence_slice(source, spec, tmp / "slice");
+  auto reader = open_dataset(slice.dir);
+  TrackingConfig config;
+  config.background_loop_closure = false;
+  Tracker tracker(config, reader->camera());
+  KeyframeRateRun run;
+  std::vector<Pose> gt;
+  std::vector<TrackResult> results;
+  for (size_t i = 0; i < reader->size(); ++i) {
+    const Frame f = reader->load(i);
+    gt.push_back(*f.gt_T_world_camera);
+    results.push_back(tracker.track(f));
+  }
+  run.frames = results.size();
+  size_t last = 0;  // last verified frame
+  for (size_t i = 1; i < results.size(); ++i) {
+    if (!results[i].pose_verified()) {
+      ++run.lost;
+      continue;
+    }
+    const Pose truth = gt[last].inverse() * gt[i];
+    const Pose est = results[last].T_world_camera.inverse() * results[i].T_world_camera;
+    last = i;
+    const double dt = (est.translation() - truth.translation()).norm(), dr = rotation_deg(est, truth);
+    run.wrong_verified += dt > 0.10 || dr > 5.0;
+    if (dt > 0.10 || dr > 5.0)
+      std::cout << "[tracking] verified frame " << i << " is " << dt * 100 << " cm / " << dr << " deg off" << std::endl;
+  }
+  Trajectory truth_traj;
+  for (size_t i = 0; i < gt.size(); ++i) truth_traj.push_back({results[i].timestamp, gt[i]});
+  run.ate_rmse_m = compute_ate(truth_traj, tracker.finish()).rmse;
+  std::cout << "[tracking] keyframe-rate slice " << source.filename().string() << ": " << run.frames << " frames, lost "
+            << run.lost << ", wrong verified " << run.wrong_verified << ", ATE " << run.ate_rmse_m * 100 << " cm" << std::endl;
+  return run;
+}
+
+TEST(TrackingSlices, TumFr1RpyKeyframeRate) {
+  SEMAP_REQUIRE_DATA(dir, "tum_fr1_rpy");
+  const KeyframeRateRun run = run_keyframe_rate(dir);
+  ASSERT_GE(run.frames, 10u);
+  EXPECT_EQ(run.wrong_verified, 0u);
+  EXPECT_LE(run.ate_rmse_m, 0.10);  // the issue's keyframe-rate target
+  EXPECT_LE(run.lost, run.frames / 3);
+}
+
+// redkitchen at keyframe rate loses most frames (wide baselines the registration does not
+// bridge yet: issue 42 open); what holds is that none of the poses it verifies is wrong.
+TEST(TrackingSlices, RedkitchenKeyframeRateVerifiesNoWrongPose) {
+  SEMAP_REQUIRE_DATA(dir, "7scenes_redkitchen");
+  const KeyframeRateRun run = run_keyframe_rate(dir);
+  ASSERT_GE(run.frames, 10u);
+  EXPECT_EQ(run.wrong_verified, 0u);
+  EXPECT_LT(run.lost, run.frames - 1);  // at least one frame after the first is tracked
+}
+
 // 20 frames of all-zero depth and black colour mid-sequence: every one is lost (never a pose
 // that failed its checks), and the first frame after the gap is relocalised within 5 cm / 3 deg
 // of the ground truth, measured relative to the last frame before the gap (drift before the

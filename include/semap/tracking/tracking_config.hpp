@@ -100,6 +100,57 @@ struct RansacParams {
   }
 };
 
+/// Verification of a registration before it is trusted (issue 42, METHODS.md A2 "tracking
+/// loss"): the section `tracking.verify`. Bounds derive from the depth sensor's noise model
+/// (Kinect v1 axial noise, Nguyen et al. 2012: sigma(z) = base + quadratic * (z - 0.4 m)^2)
+/// or are scale-free ratios; none is fitted to a sequence. registration_check.hpp applies them.
+struct VerificationParams {
+  bool enabled = true;                 ///< off: registrations are judged as before issue 42
+  /// Dense depth residual: the frame's depth warped into the reference with the candidate pose.
+  double depth_noise_base_m = 0.0012;  ///< sigma(z) at 0.4 m, metres
+  double depth_noise_quadratic = 0.0019;  ///< sigma(z) growth, metres per metre^2 beyond 0.4 m
+  double residual_sigmas = 3.0;        ///< a warped point agrees within this many sigma(z) ...
+  double residual_pose_tolerance_m = 0.01;  ///< ... plus this (the pose's own error, depth edges), metres
+  int residual_level = 2;              ///< pyramid level the dense residual is computed at (2 = quarter resolution)
+  /// Agreeing share of the warped points the reference saw (agreeing + in its free space) below
+  /// which the pose is wrong: a point the reference saw through cannot be there. Right poses on
+  /// the shared sequences measure >= 0.7 (depth edges, noise), a pose 30 cm off along the view < 0.1.
+  double min_consistent_fraction = 0.6;
+  /// Agreeing share of all warped points the reference saw (points hidden behind its surface
+  /// included) below which the pose explains too little: a pose pushed 30 cm away hides almost
+  /// all (< 0.1); right poses on the shared sequences measure >= 0.35 (occlusions, edges).
+  double min_agreeing_share = 0.2;
+  /// Inlier spread: ORB inliers on a grid x grid partition of the image must occupy this many
+  /// cells for the feature estimate to be trusted (matches on one patch pin down little).
+  int spread_grid = 4;
+  int spread_min_cells = 3;
+  /// Second hypothesis: a distinct RANSAC model (fewer than half of its votes from the best's
+  /// inliers: other matches explain the frame) with at least this share of the best's votes =
+  /// ambiguous (repetitive structure matched to the wrong copy).
+  double ambiguity_vote_ratio = 0.8;
+  /// Conditioning: smallest eigenvalue of the point-to-plane information of the frame's
+  /// coarsest pyramid level per point, rotation scaled by the scene's lever (scale-free; 1/3
+  /// for three orthogonal planes, ~0 for one plane; Kinect-noise normals of one wall 2 m away
+  /// give ~0.0045, a room ~0.03, the shared sequences' views >= 0.0099). Below it a pose
+  /// without trusted features is under-constrained.
+  double min_information_eigenvalue = 0.007;
+
+  void visit(ParamVisitor& v) {
+    v.param("enabled", enabled, "", "verify each registration before trusting it (issue 42)");
+    v.param("depth_noise_base_m", depth_noise_base_m, "m", "depth noise sigma at 0.4 m (sensor model)", positive(1.0));
+    v.param("depth_noise_quadratic", depth_noise_quadratic, "1/m", "depth noise growth: sigma(z) = base + this * (z - 0.4)^2", non_negative(1.0));
+    v.param("residual_sigmas", residual_sigmas, "", "dense residual bound in depth-noise sigmas", positive(100.0));
+    v.param("residual_pose_tolerance_m", residual_pose_tolerance_m, "m", "dense residual bound added for the pose's own error", non_negative(1.0));
+    v.param("residual_level", residual_level, "", "pyramid level of the dense residual (0 = full resolution)", {0, 4});
+    v.param("min_consistent_fraction", min_consistent_fraction, "", "share of warped points that must agree with the reference depth (the rest lie in its free space)", fraction());
+    v.param("min_agreeing_share", min_agreeing_share, "", "share of warped points the reference saw that must agree with its depth (hidden ones included)", fraction());
+    v.param("spread_grid", spread_grid, "cells", "grid side for the inlier spread", {1, 64});
+    v.param("spread_min_cells", spread_min_cells, "cells", "grid cells the ORB inliers must occupy for trusted features", {0, 4096});
+    v.param("ambiguity_vote_ratio", ambiguity_vote_ratio, "", "a distinct RANSAC model with this share of the best's votes makes the match ambiguous", {0.0, 1.0, true});
+    v.param("min_information_eigenvalue", min_information_eigenvalue, "", "smallest scaled point-to-plane information eigenvalue per point (coarsest level) a pose without trusted features needs", {0.0, 1.0});
+  }
+};
+
 /// Random ferns encoding of keyframes (METHODS.md A3): the keys `tracking.fern_*`. A saved
 /// map's keyframes are only recognised with the same values (map_archive checks them).
 struct FernParams {
@@ -155,6 +206,7 @@ struct TrackingConfig {
   double loss_min_overlap = 0.20;      ///< fewer than this fraction of source points matched = lost
   double loss_max_translation_jump = 0.30;  ///< without trusted feature support: a jump from the motion prior above this = lost, metres
   double loss_max_rotation_jump_deg = 30.0; ///< same for rotation, degrees
+  VerificationParams verify;          ///< checks a registration must pass (issue 42)
   int relocalisation_candidates = 3;   ///< keyframes (by fern similarity) tried when lost
   int relocalisation_recent = 2;       ///< plus this many most recent keyframes
   double relocalisation_min_overlap = 0.4;  ///< ICP overlap a relocalisation needs (no prior to check it against)
@@ -213,6 +265,7 @@ struct TrackingConfig {
     v.param("loss_min_overlap", loss_min_overlap, "", "matched fraction below this means lost", {0.0, 1.0});
     v.param("loss_max_translation_jump", loss_max_translation_jump, "m", "jump from the motion prior that an estimate without trusted features may not make", positive(100.0));
     v.param("loss_max_rotation_jump_deg", loss_max_rotation_jump_deg, "deg", "same for rotation", positive(180.0));
+    v.section("verify", "checks each registration must pass before it is trusted (issue 42)", [&](ParamVisitor& s) { verify.visit(s); });
     v.param("relocalisation_candidates", relocalisation_candidates, "", "keyframes (by fern similarity) tried when relocalising", {0, 1000});
     v.param("relocalisation_recent", relocalisation_recent, "", "most recent keyframes also tried when relocalising", {0, 1000});
     v.param("relocalisation_min_overlap", relocalisation_min_overlap, "", "ICP overlap a relocalisation needs", fraction());
@@ -247,6 +300,8 @@ struct TrackingConfig {
   void validate() const {
     check_param_ranges(*this, "tracking");
     require_param(max_depth > min_depth, "tracking.max_depth", "need min_depth < max_depth");
+    require_param(verify.spread_min_cells <= verify.spread_grid * verify.spread_grid, "tracking.verify.spread_min_cells",
+                  "must be <= spread_grid^2");
     require_param(ransac.trusted_inliers >= ransac.min_inliers, "tracking.ransac_trusted_inliers", "must be >= ransac_min_inliers");
   }
 };
