@@ -124,7 +124,7 @@ TEST(NavigationUnit, OnEdgesPickTheSupportRightUnder) {
                                               object(3, cup, {2.0f, 2.0f, 0.76f}, {2.08f, 2.08f, 0.86f})};
   OccupancyGrid grid;  // an empty grid: no floor mapped
   NavigationConfig config;
-  const SceneGraph g = build_scene_graph(objects, grid, config);
+  const SceneGraph g = build_scene_graph(objects, grid, {}, config);
   std::vector<std::pair<std::string, std::string>> on;
   for (const SceneEdge& e : g.edges)
     if (e.relation == Relation::kOn) on.emplace_back(e.source, e.target);
