@@ -61,19 +61,31 @@ void add_on_edges(SceneGraph& g, bool floor_mapped) {
   }
 }
 
+/// Whether the graph already has on(a, b).
+bool rests_on(const SceneGraph& g, const SceneObjectNode& a, const SceneObjectNode& b) {
+  return std::any_of(g.edges.begin(), g.edges.end(), [&](const SceneEdge& e) {
+    return e.relation == Relation::kOn && e.source == object_node_id(a.id) && e.target == object_node_id(b.id);
+  });
+}
+
 void add_in_and_near_edges(SceneGraph& g) {
+  const double tol = g.config.on_tolerance_m;
+  std::vector<SceneEdge> edges;
   for (const SceneObjectNode& a : g.objects)
     for (const SceneObjectNode& b : g.objects) {
       if (a.id == b.id) continue;
       const double va = a.box.size_m.prod(), vb = b.box.size_m.prod();
-      if (b.box.contains(a.centroid_G) && va < 0.5 * vb)
-        g.edges.push_back({Relation::kIn, object_node_id(a.id), object_node_id(b.id),
-                           {{"volume_ratio", vb > 0 ? va / vb : 0.0}, {"centroid_inside", true}}});
+      if (b.box.contains(a.box.center_G) && va < 0.5 * vb && a.box.top_m() <= b.box.top_m() + tol && !rests_on(g, a, b))
+        edges.push_back({Relation::kIn, object_node_id(a.id), object_node_id(b.id),
+                         {{"volume_ratio", vb > 0 ? va / vb : 0.0},
+                          {"centre_inside", true},
+                          {"top_below_m", b.box.top_m() - a.box.top_m()}}});
       const double d = (a.centroid_G - b.centroid_G).norm();
       if (a.id < b.id && d <= g.config.near_distance_m)
-        g.edges.push_back({Relation::kNear, object_node_id(a.id), object_node_id(b.id),
-                           {{"distance_m", d}, {"threshold_m", g.config.near_distance_m}}});
+        edges.push_back({Relation::kNear, object_node_id(a.id), object_node_id(b.id),
+                         {{"distance_m", d}, {"threshold_m", g.config.near_distance_m}}});
     }
+  g.edges.insert(g.edges.end(), edges.begin(), edges.end());
 }
 
 /// Places (navigation/places.hpp) and each object's in_place edge: the place of the room-space

@@ -13,7 +13,9 @@
 //                  floor was mapped and its bottom lies at most floor_support_max_gap_m above it
 //                  (a table's legs hidden by chairs); else (wall-mounted, on an unmapped counter)
 //                  it has no `on`.
-//   in(A, B)       A's centroid lies inside B's box and A's box volume is under half of B's.
+//   in(A, B)       A's box centre lies inside B's box, A's box volume is under half of B's,
+//                  A's top is at most on_tolerance_m above B's (a chair pushed under a table
+//                  sticks out) and A is not `on` B (a cup on a table is not in it).
 //   near(A, B)     centroids at most near_distance_m apart (A < B by id, listed once).
 //   in_place(A, P) the room-space cell (navigation/places.hpp) nearest A's box centre belongs
 //                  to place P.
