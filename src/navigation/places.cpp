@@ -49,15 +49,24 @@ std::vector<int> grow(const cv::Mat& room, std::vector<int> seed_of_cell) {
   return seed_of_cell;
 }
 
-/// Seeds: core components (clearance > w / 2) holding a cell with clearance >= w. Each seed is
-/// its list of cells and its largest clearance (m).
+/// Open space: room space and unknown cells. Unobserved floor (the middle of a room a camera
+/// circled, looking out) must not narrow a room; walls and unlabelled obstacles do.
+cv::Mat open_space(const OccupancyGrid& grid, const cv::Mat& room) {
+  cv::Mat open = room.clone();
+  for (size_t i = 0; i < grid.state.size(); ++i)
+    if (grid.state[i] == CellState::kUnknown) open.data[i] = 1;
+  return open;
+}
+
+/// Seeds: core components (clearance in open space > w / 2) holding a cell with clearance >= w;
+/// a seed is its room-space cells (none: no seed) and its largest clearance (m).
 struct Seed {
   std::vector<int> cells;
   double clearance_m = 0.0;
 };
-std::vector<Seed> room_seeds(const cv::Mat& room, double resolution_m, double passage_m) {
-  cv::Mat clearance;  // cells to the nearest cell outside the room space
-  cv::distanceTransform(room, clearance, cv::DIST_L2, cv::DIST_MASK_PRECISE, CV_32F);
+std::vector<Seed> room_seeds(const cv::Mat& room, const cv::Mat& open, double resolution_m, double passage_m) {
+  cv::Mat clearance;  // cells to the nearest closed cell (a wall, an obstacle that is no object)
+  cv::distanceTransform(open, clearance, cv::DIST_L2, cv::DIST_MASK_PRECISE, CV_32F);
   clearance *= resolution_m;
   const cv::Mat core = clearance > 0.5 * passage_m;
   cv::Mat labels;
@@ -67,8 +76,8 @@ std::vector<Seed> room_seeds(const cv::Mat& room, double resolution_m, double pa
     for (int x = 0; x < room.cols; ++x) {
       const int k = labels.at<int>(y, x);
       if (k == 0) continue;
-      seeds[k].cells.push_back(y * room.cols + x);
       seeds[k].clearance_m = std::max<double>(seeds[k].clearance_m, clearance.at<float>(y, x));
+      if (room.at<uint8_t>(y, x)) seeds[k].cells.push_back(y * room.cols + x);
     }
   std::erase_if(seeds, [&](const Seed& s) { return s.cells.empty() || s.clearance_m < passage_m; });
   return seeds;
@@ -82,7 +91,8 @@ PlaceMap segment_places(const OccupancyGrid& grid, const NavigationConfig& confi
   const size_t n = grid.state.size();
   const cv::Mat room = room_space(grid);
   std::vector<Seed> seeds;
-  if (config.place_passage_width_m > 0) seeds = room_seeds(room, grid.resolution_m, config.place_passage_width_m);
+  if (config.place_passage_width_m > 0)
+    seeds = room_seeds(room, open_space(grid, room), grid.resolution_m, config.place_passage_width_m);
   const double cell_m2 = grid.resolution_m * grid.resolution_m;
   for (int growth = 0; growth < kMaxGrowths; ++growth) {
     // Seeds first, then one region per connected room space that no seed reaches.

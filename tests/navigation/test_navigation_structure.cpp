@@ -187,6 +187,28 @@ TEST(NavigationStructure, DoorSplitsTwoRoomsIntoTwoPlaces) {
   EXPECT_EQ(to_json(again), to_json(g));
 }
 
+// A camera that circled the middle of a room, looking out, saw a ring of floor around an
+// unknown middle: one room, one place (unknown space does not narrow it).
+TEST(NavigationStructure, RingOfFreeFloorAroundUnknownMiddleIsOnePlace) {
+  // A 6 x 6 m room; the unseen middle is an ellipse 5.4 x 2.4 m: the ring is 1.8 m wide above
+  // and below it (room cores) and 0.3 m at its ends (narrow: a split if unknown closed the room).
+  OccupancyGrid g;
+  g.resolution_m = 0.05, g.width = 120, g.height = 120;
+  g.state.assign(120 * 120, CellState::kFree);
+  g.top_label.assign(g.state.size(), 0);
+  g.top_height_m.assign(g.state.size(), 0.f);
+  for (int iy = 0; iy < g.height; ++iy)
+    for (int ix = 0; ix < g.width; ++ix) {
+      const Eigen::Vector2d d = g.cell_centre(ix, iy) - Eigen::Vector2d(3.0, 3.0);
+      const size_t i = g.index(ix, iy);
+      if (ix == 0 || iy == 0 || ix == g.width - 1 || iy == g.height - 1)
+        g.state[i] = CellState::kOccupied, g.top_label[i] = cls("wall");
+      else if (std::pow(d.x() / 2.7, 2) + std::pow(d.y() / 1.2, 2) < 1.0)
+        g.state[i] = CellState::kUnknown;
+    }
+  EXPECT_EQ(segment_places(g, NavigationConfig{}).places.size(), 1u);
+}
+
 TEST(NavigationStructure, WideOpeningAndNoSplitGiveOnePlace) {
   NavigationConfig config;
   EXPECT_EQ(segment_places(two_rooms(1.6), config).places.size(), 1u);  // an opening, not a door

@@ -3,10 +3,12 @@
 //
 // Room space: the free cells plus the occupied cells whose top surface is an object's (a class
 // that is not stuff; furniture stands inside a room and must not cut it). With
-// place_passage_width_m = w > 0, a distance transform of the room space gives each cell its
-// clearance (distance to the nearest cell outside it: a wall, an unlabelled obstacle, unknown
-// space); the cells with clearance > w / 2 are the room cores, and a core with clearance >= w
-// somewhere (a room at least 2 w across) seeds a place. Every room-space cell joins the seed
+// place_passage_width_m = w > 0, a distance transform of the open space (room space and unknown
+// cells: unobserved floor, e.g. the middle of a room a camera circled looking out, must not
+// narrow a room) gives each cell its clearance (distance to the nearest closed cell: a wall, an
+// obstacle that is no object); the cells with clearance > w / 2 are the room cores, and a core
+// with clearance >= w somewhere (a room at least 2 w across) seeds a place with its room-space
+// cells. Every room-space cell joins the seed
 // reached first by a breadth-first growth over the room space (8-neighbourhood: a geodesic
 // Voronoi split at the doors). Connected room space that no seed reaches is one place. A place
 // with under min_place_area_m2 of free cells is dropped and the growth repeated without its
