@@ -11,6 +11,7 @@ PACKAGES=(
   libopen3d-dev libcpp-httplib-dev libdeflate-dev libsqlite3-dev liblz4-dev libzstd-dev
   librosbag-storage-dev libsensor-msgs-dev libroslz4-dev libbz2-dev libopenni2-dev libopencv-contrib-dev
   pybind11-dev python3-dev python3-numpy python3-yaml python3-pytest python3-opencv python3-open3d python3-dask python3-distributed
+  python3-pil  # issue 39: tests/python/test_navigation.py reads map.pgm as map_server does
 )
 # Extra packages can be requested by callers, e.g. the CI adds clang for fuzzing.
 PACKAGES+=("$@")

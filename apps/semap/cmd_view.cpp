@@ -49,6 +49,9 @@ std::string manifest_json(const fs::path& dir) {
   optional("objects", "objects.json");
   optional("trajectory", "trajectory.txt");
   optional("report", "report.html");
+  optional("grid", "map.pgm");  // issue 39: occupancy grid and scene graph layers
+  optional("grid_yaml", "map.yaml");
+  optional("scene_graph", "scene_graph.json");
   files["classes"] = "classes.json";
   const fs::path absolute = fs::weakly_canonical(dir);
   nlohmann::json manifest{{"title", absolute.filename().string()}, {"files", files}};

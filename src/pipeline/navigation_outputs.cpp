@@ -14,7 +14,8 @@ NavigationMaps build_navigation_maps(const Mapper& mapper, const TriangleMesh& m
   maps.gravity = estimate_gravity(mesh, trajectory);
   const NavigationConfig& config = mapper.config().navigation;
   mapper.read_tsdf([&](const TsdfMap& map) { maps.grid = build_occupancy_grid(map, maps.gravity.T_W_G, config); });
-  maps.scene_graph = build_scene_graph(objects, maps.grid, config);
+  const std::vector<SurfaceNode> structure = fit_structural_surfaces(mesh, maps.gravity.T_W_G, config);
+  maps.scene_graph = build_scene_graph(objects, maps.grid, structure, config);
   return maps;
 }
 

@@ -124,12 +124,51 @@ TEST(NavigationUnit, OnEdgesPickTheSupportRightUnder) {
                                               object(3, cup, {2.0f, 2.0f, 0.76f}, {2.08f, 2.08f, 0.86f})};
   OccupancyGrid grid;  // an empty grid: no floor mapped
   NavigationConfig config;
-  const SceneGraph g = build_scene_graph(objects, grid, config);
+  const SceneGraph g = build_scene_graph(objects, grid, {}, config);
   std::vector<std::pair<std::string, std::string>> on;
   for (const SceneEdge& e : g.edges)
     if (e.relation == Relation::kOn) on.emplace_back(e.source, e.target);
   // The cup over the table rests on it; the one beside it at table height rests on nothing.
   EXPECT_EQ(on, (std::vector<std::pair<std::string, std::string>>{{"object_2", "object_1"}}));
+  // The cup rests on the table, it is not in it (its box lies within the table's grown box).
+  for (const SceneEdge& e : g.edges) EXPECT_NE(e.relation, Relation::kIn) << e.source << " in " << e.target;
   const SceneGraph again = scene_graph_from_json(to_json(g), "test");
   EXPECT_EQ(to_json(again), to_json(g));
+}
+
+// Real tables carry clutter the object map counts as table: the box reaches above the top the
+// cups stand on. The support height is the top surface (densest layer), and a cup resting on
+// the table is `on` it, not `in` it; a chair pushed under the table sticks out: not `in` either.
+TEST(NavigationUnit, ClutteredTableCarriesItsCupAndHoldsNothing) {
+  const ClassId table = *class_from_name("table"), cup = *class_from_name("cup"), chair = *class_from_name("chair");
+  ObjectSummary t;
+  t.id = 1, t.class_id = table;
+  for (float x = 0; x <= 1.2f; x += 0.02f)
+    for (float y = 0; y <= 0.8f; y += 0.02f) t.points.emplace_back(x, y, 0.74f);  // the top
+  for (float z = 0; z < 0.74f; z += 0.02f)
+    for (const Eigen::Vector2f leg : {Eigen::Vector2f(0.05f, 0.05f), Eigen::Vector2f(1.15f, 0.75f)})
+      t.points.emplace_back(leg.x(), leg.y(), z);
+  for (float x = 0.6f; x <= 0.9f; x += 0.02f)  // a pile of papers the map gave the table, 15 cm high
+    for (float z = 0.76f; z <= 0.9f; z += 0.02f) t.points.emplace_back(x, 0.6f, z);
+  t.centroid = Eigen::Vector3f(0.6f, 0.4f, 0.7f);
+  auto block = [](uint32_t id, ClassId c, Eigen::Vector3f lo, Eigen::Vector3f hi) {
+    ObjectSummary o;
+    o.id = id, o.class_id = c, o.centroid = 0.5f * (lo + hi);
+    for (float x = lo.x(); x <= hi.x(); x += 0.02f)
+      for (float y = lo.y(); y <= hi.y(); y += 0.02f)
+        for (float z = lo.z(); z <= hi.z(); z += 0.02f) o.points.emplace_back(x, y, z);
+    return o;
+  };
+  const std::vector<ObjectSummary> objects = {t, block(2, cup, {0.3f, 0.2f, 0.75f}, {0.38f, 0.28f, 0.84f}),
+                                              block(3, chair, {0.4f, 0.5f, 0.0f}, {0.8f, 0.9f, 0.95f})};
+  const SceneGraph g = build_scene_graph(objects, OccupancyGrid{}, {}, NavigationConfig{});
+  ASSERT_EQ(g.objects.size(), 3u);
+  EXPECT_GT(g.objects[0].box.top_m(), 0.8) << "the clutter lifts the box";
+  EXPECT_NEAR(g.objects[0].support_height_m, 0.74, 0.01);
+  size_t on = 0;
+  for (const SceneEdge& e : g.edges) {
+    EXPECT_NE(e.relation, Relation::kIn) << e.source << " in " << e.target;
+    on += e.relation == Relation::kOn && e.source == "object_2" && e.target == "object_1";
+  }
+  EXPECT_EQ(on, 1u);
 }

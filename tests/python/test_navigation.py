@@ -1,4 +1,4 @@
-"""Issue 39: the occupancy grid opens with yaml + OpenCV exactly as ROS map_server reads it
+"""Issue 39: the occupancy grid opens with yaml + OpenCV or Pillow exactly as ROS map_server reads it
 (origin in metres, occupied = black), the distance field with numpy, and the scene graph through
 semap.load_scene_graph. One `semap run` of a small synthetic world (ground-truth labels)."""
 import subprocess
@@ -85,6 +85,30 @@ def test_grid_loads_like_map_server(run_out):
     assert seen and seen <= palette
 
 
+def test_grid_loads_with_pillow_like_map_server(run_out):
+    """map_server reads the image with SDL_image; Pillow (python3-pil) is the usual Python
+    stand-in: an 8-bit grey image whose map_server states equal those read through OpenCV, with
+    the yaml's origin in metres (the lower-left cell's corner) and occupied = black (0)."""
+    yaml, cv2 = _imports()
+    try:
+        from PIL import Image
+    except ImportError as e:
+        skip_or_fail("missing Python package: %s" % e)
+    out, _ = run_out
+    meta = yaml.safe_load((out / "map.yaml").read_text())
+    image = Image.open(out / meta["image"])
+    assert image.mode == "L" and image.format == "PPM"
+    pixels = np.asarray(image)
+    p = (255.0 - pixels) / 255.0  # negate 0
+    states = np.full(pixels.shape, -1, np.int8)
+    states[p > meta["occupied_thresh"]] = 100
+    states[p < meta["free_thresh"]] = 0
+    expected, _ = map_server_load(out / "map.yaml", yaml, cv2)
+    assert np.array_equal(states[::-1], expected)
+    assert set(np.unique(pixels)) <= {0, 205, 254} and (pixels == 0).any()
+    assert all(isinstance(v, (int, float)) for v in meta["origin"]) and meta["origin"][2] == 0.0
+
+
 def test_distance_field_and_scene_graph(run_out):
     yaml, cv2 = _imports()
     out, _ = run_out
@@ -98,6 +122,12 @@ def test_distance_field_and_scene_graph(run_out):
     assert graph["frame"] == "gravity" and graph["objects"]
     on = [e for e in graph["edges"] if e["relation"] == "on"]
     assert on and all("gap_m" in e["evidence"] for e in on)
+    # Structural nodes and places: the floor, the synthetic room's walls, one place (one room).
+    kinds = [s["kind"] for s in graph["surfaces"]]
+    assert kinds.count("floor") == 1 and kinds.count("wall") >= 1
+    assert all("evidence" in s for s in graph["surfaces"])
+    assert len(graph["places"]) == 1
+    assert not [e for e in graph["edges"] if e["target"].startswith(("wall", "ceiling"))]
     assert {"scene_graph.json", "map.pgm", "map.yaml", "esdf.npy", "map_labels.png"} <= set(
         p.name for p in out.iterdir())
     with pytest.raises(semap.Error):

@@ -1,5 +1,6 @@
 // semap viewer: labelled mesh with per-class toggles, object boxes with labels (click -> class
-// distribution and point count) and the camera trajectory. Loads its data relative to the page
+// distribution and point count), the camera trajectory, and the occupancy grid and scene graph
+// (navigation.js) when the folder has them. Loads its data relative to the page
 // as listed by viewer.json (written by `semap view`), so optional files that are absent are
 // never fetched (no 404s in the console). With a "live" entry (`semap run --view`) it polls the
 // run's live.json and reloads the map whenever a new snapshot is out.
@@ -7,6 +8,7 @@ import * as THREE from 'three';
 import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
 import { CSS2DRenderer, CSS2DObject } from 'three/examples/jsm/renderers/CSS2DRenderer.js';
 import { parsePly } from './ply.js';
+import { parseMapYaml, parsePgm, buildGridLayer, buildGraphLayers, GRID_COLOURS, EDGE_COLOURS } from './navigation.js';
 
 const CLEAR_COLOUR = 0x1e2228;  // the screenshot test counts pixels differing from this
 
@@ -55,7 +57,12 @@ scene.add(sun);
 const meshGroup = new THREE.Group();
 const boxGroup = new THREE.Group();
 const trajectoryGroup = new THREE.Group();
-scene.add(meshGroup, boxGroup, trajectoryGroup);
+const gridGroup = new THREE.Group();   // occupancy grid (map.pgm)
+const graphGroup = new THREE.Group();  // scene graph: on / in / in_place edges, places, walls
+const nearGroup = new THREE.Group();   // scene graph: near and in_place edges (many; off by default)
+nearGroup.visible = false;
+scene.add(meshGroup, boxGroup, trajectoryGroup, gridGroup, graphGroup, nearGroup);
+const layers = { boxes: boxGroup, trajectory: trajectoryGroup, grid: gridGroup, graph: graphGroup, near: nearGroup };
 
 let needsRender = true;
 controls.addEventListener('change', () => { needsRender = true; });
@@ -476,6 +483,27 @@ function estimateUp(floorId, poses) {
   return fromTrajectory || new THREE.Vector3(0, 0, 1);
 }
 
+// Looks straight down at the map (the grid as a plan), keeping the current target and distance.
+function viewFromAbove() {
+  state.viewBeforeTop = { position: camera.position.clone(), target: controls.target.clone() };
+  const up = camera.up.clone().normalize();
+  const distance = camera.position.distanceTo(controls.target);
+  // A hair off vertical so that OrbitControls keeps a defined azimuth.
+  const side = new THREE.Vector3(1, 0, 0).sub(up.clone().multiplyScalar(up.x)).normalize();
+  camera.position.copy(controls.target).addScaledVector(up, distance).addScaledVector(side, distance * 1e-3);
+  controls.update();
+  needsRender = true;
+}
+
+// Back to the view before viewFromAbove (tests).
+function restoreView() {
+  if (!state.viewBeforeTop) return;
+  camera.position.copy(state.viewBeforeTop.position);
+  controls.target.copy(state.viewBeforeTop.target);
+  controls.update();
+  needsRender = true;
+}
+
 function fitCamera(box, up) {
   const centre = box.getCenter(new THREE.Vector3());
   const size = box.getSize(new THREE.Vector3());
@@ -561,13 +589,56 @@ async function loadMap(files, quiet = false) {
   } else {
     say('No trajectory.txt: no camera path.', 'warn');
   }
+  await loadNavigation(files, say);
   if (bounds.isEmpty()) for (const entry of state.objects) bounds.expandByPoint(entry.centre);
   return { bounds, poses };
 }
 
+// The occupancy grid and the scene graph (issue 39), when the folder has them: each a layer
+// with its toggle and legend row; absent files hide their rows.
+async function loadNavigation(files, say) {
+  state.layerCounts = {};
+  if (files.grid && files.grid_yaml) {
+    try {
+      const yaml = parseMapYaml(await fetchChecked(files.grid_yaml, 'text'));
+      const layer = buildGridLayer(yaml, parsePgm(await fetchChecked(files.grid, 'binary')));
+      gridGroup.add(layer.object);
+      state.layerCounts.grid = { free: layer.free, occupied: layer.occupied };
+      say(`occupancy grid: ${layer.free.toLocaleString()} free, ${layer.occupied.toLocaleString()} occupied cells`);
+    } catch (error) {
+      showMessage(`map.pgm could not be shown: ${error.message}`, 'error');
+    }
+  }
+  if (files.scene_graph) {
+    try {
+      const { graph, near, counts } = buildGraphLayers(await fetchChecked(files.scene_graph, 'json'));
+      graphGroup.add(graph);
+      nearGroup.add(near);
+      state.layerCounts.graph = counts;
+      say(`scene graph: ${counts.on} on, ${counts.in} in, ${counts.near} near, ${counts.places} place(s), ${counts.walls} wall(s)`);
+    } catch (error) {
+      showMessage(`scene_graph.json could not be shown: ${error.message}`, 'error');
+    }
+  }
+  for (const [id, present] of [['row-grid', Boolean(state.layerCounts.grid)], ['row-graph', Boolean(state.layerCounts.graph)],
+    ['row-near', Boolean(state.layerCounts.graph)], ['row-top-view', Boolean(state.layerCounts.grid)],
+    ['legend-navigation', Boolean(state.layerCounts.grid || state.layerCounts.graph)]]) {
+    document.getElementById(id).hidden = !present;
+  }
+}
+
+function buildNavigationLegend() {
+  const swatch = (rgb, text) => `<span class="legend-item"><span class="swatch" style="background: rgb(${rgb.join(',')})"></span>${text}</span>`;
+  document.getElementById('legend-navigation').innerHTML =
+    swatch(GRID_COLOURS.free, 'free') + swatch(GRID_COLOURS.occupied, 'occupied') + '<br>' +
+    swatch(EDGE_COLOURS.on, 'on') + swatch(EDGE_COLOURS.in, 'in') + swatch(EDGE_COLOURS.in_place, 'in place') +
+    swatch(EDGE_COLOURS.near, 'near') + swatch(EDGE_COLOURS.wall, 'wall');
+}
+buildNavigationLegend();
+
 // Empties the scene groups and what refers to them (before a live refresh loads the map again).
 function clearMap() {
-  for (const group of [meshGroup, boxGroup, trajectoryGroup]) {
+  for (const group of [meshGroup, boxGroup, trajectoryGroup, gridGroup, graphGroup, nearGroup]) {
     group.traverse((node) => {
       if (node.geometry) node.geometry.dispose();
       if (node.material) node.material.dispose();
@@ -679,9 +750,15 @@ function finish() {
   document.body.dataset.ready = 'true';
 }
 
-// Layer toggles.
-document.getElementById('show-boxes').addEventListener('change', (e) => { boxGroup.visible = e.target.checked; needsRender = true; });
-document.getElementById('show-trajectory').addEventListener('change', (e) => { trajectoryGroup.visible = e.target.checked; needsRender = true; });
+// Layer toggles: checkbox show-<name> for each of `layers`.
+function setLayer(name, visible) {
+  layers[name].visible = visible;
+  document.getElementById(`show-${name}`).checked = visible;
+  needsRender = true;
+}
+for (const name of Object.keys(layers)) {
+  document.getElementById(`show-${name}`).addEventListener('change', (e) => setLayer(name, e.target.checked));
+}
 document.getElementById('colour-mode').addEventListener('change', (e) => setColourMode(e.target.value));
 // "c" switches between the surface colour and the class colours.
 window.addEventListener('keydown', (e) => {
@@ -690,6 +767,7 @@ window.addEventListener('keydown', (e) => {
   select.value = select.value === 'rgb' ? 'class' : 'rgb';
   setColourMode(select.value);
 });
+document.getElementById('top-view').addEventListener('click', viewFromAbove);
 document.getElementById('all-classes').addEventListener('click', () => setAllClasses(true));
 document.getElementById('no-classes').addEventListener('click', () => setAllClasses(false));
 
@@ -712,6 +790,10 @@ window.semapViewer = {
     return { x: rect.left + (p.x + 1) / 2 * rect.width, y: rect.top + (1 - p.y) / 2 * rect.height, id: entry.object.id };
   },
   setAllClasses,
+  setLayer,
+  viewFromAbove,
+  restoreView,
+  layerCounts: () => ({ ...state.layerCounts }),
   render() { renderer.render(scene, camera); labelRenderer.render(scene, camera); },
 };
 

@@ -4,6 +4,8 @@
 //     --min-fraction (UI panels hidden for this shot),
 //   - the class toggles work: with every class switched off most of those pixels disappear,
 //   - clicking an object box opens its panel (class distribution, point count),
+//   - the occupancy grid and scene graph layers (when the folder has them) each change the
+//     picture when toggled (layers_on.png, grid_off.png, graph_off.png),
 //   - the console shows no errors and no request fails.
 // With --live-gap-ms G (a `semap run --view` page) it checks the live view instead: two
 // screenshots G ms apart, each after a new snapshot arrived, must show a growing mesh.
@@ -59,6 +61,53 @@ async function foregroundFraction(page, png) {
   }, { b64: png.toString('base64'), clear: CLEAR });
 }
 
+// Fraction of pixels that differ between two PNGs of the same size (decoded by the page).
+async function differingFraction(page, pngA, pngB) {
+  return page.evaluate(async ({ a, b }) => {
+    const decode = async (b64) => {
+      const image = new Image();
+      image.src = `data:image/png;base64,${b64}`;
+      await image.decode();
+      const canvas = document.createElement('canvas');
+      canvas.width = image.width;
+      canvas.height = image.height;
+      canvas.getContext('2d').drawImage(image, 0, 0);
+      return canvas.getContext('2d').getImageData(0, 0, canvas.width, canvas.height).data;
+    };
+    const [da, db] = [await decode(a), await decode(b)];
+    let differing = 0;
+    for (let i = 0; i < da.length; i += 4) {
+      if (Math.abs(da[i] - db[i]) + Math.abs(da[i + 1] - db[i + 1]) + Math.abs(da[i + 2] - db[i + 2]) > 24) ++differing;
+    }
+    return differing / (da.length / 4);
+  }, { a: pngA.toString('base64'), b: pngB.toString('base64') });
+}
+
+// The grid and scene graph layers (issue 39): switching each off changes the canvas.
+async function layerChecks(page, args, result, problems) {
+  result.layer_counts = await page.evaluate(() => window.semapViewer.layerCounts());
+  const present = ['grid', 'graph'].filter((name) => result.layer_counts[name]);
+  if (present.length === 0) return;
+  await page.evaluate(() => { document.body.classList.add('hide-ui'); window.semapViewer.render(); });
+  const on = await page.screenshot({ path: path.join(args.out, 'layers_on.png') });
+  result.layer_toggle_fraction = {};
+  for (const name of present) {
+    await page.evaluate((n) => { window.semapViewer.setLayer(n, false); window.semapViewer.render(); }, name);
+    const off = await page.screenshot({ path: path.join(args.out, `${name}_off.png`) });
+    await page.evaluate((n) => { window.semapViewer.setLayer(n, true); window.semapViewer.render(); }, name);
+    const fraction = await differingFraction(page, on, off);
+    result.layer_toggle_fraction[name] = fraction;
+    if (!(fraction > 0.001)) problems.push(`switching the ${name} layer off changes only ${(100 * fraction).toFixed(3)}% of the canvas`);
+  }
+  await page.evaluate(() => { document.body.classList.remove('hide-ui'); window.semapViewer.render(); });
+  // The plan view a user gets from "view from above", for people to look at (not checked).
+  if (result.layer_counts.grid) {
+    await page.evaluate(() => { window.semapViewer.viewFromAbove(); window.semapViewer.render(); });
+    await page.screenshot({ path: path.join(args.out, 'from_above.png') });
+    await page.evaluate(() => { window.semapViewer.restoreView(); window.semapViewer.render(); });
+  }
+}
+
 // The live view: a first screenshot once a snapshot with a mesh is shown, a second one `gap`
 // ms later after a newer snapshot; the mesh must have grown between them.
 async function liveCheck(page, args, result, problems) {
@@ -92,8 +141,16 @@ async function folderChecks(page, args, result, problems) {
     problems.push(`only ${(100 * result.foreground_fraction).toFixed(2)}% of the canvas differs from the background (need > ${(100 * args.minFraction).toFixed(2)}%)`);
   }
 
-  // 3. Every class off: the triangles disappear (boxes and trajectory remain, thin lines).
-  await page.evaluate(() => { window.semapViewer.setAllClasses(false); window.semapViewer.render(); });
+  await layerChecks(page, args, result, problems);
+  await page.evaluate(() => { document.body.classList.add('hide-ui'); window.semapViewer.render(); });
+
+  // 3. Every class off: the triangles disappear (boxes and trajectory remain, thin lines; the
+  // grid and graph layers are switched off for this shot).
+  await page.evaluate(() => {
+    for (const name of ['grid', 'graph']) window.semapViewer.setLayer(name, false);
+    window.semapViewer.setAllClasses(false);
+    window.semapViewer.render();
+  });
   const hiddenPng = await page.screenshot({ path: path.join(args.out, 'classes_off.png') });
   result.foreground_fraction_classes_off = await foregroundFraction(page, hiddenPng);
   result.visible_triangles_classes_off = await page.evaluate(() => window.semapViewer.visibleTriangleCount());
@@ -101,7 +158,12 @@ async function folderChecks(page, args, result, problems) {
   if (!(result.foreground_fraction_classes_off < 0.5 * result.foreground_fraction)) {
     problems.push(`class toggles do not hide the mesh (${result.foreground_fraction_classes_off} vs ${result.foreground_fraction})`);
   }
-  await page.evaluate(() => { window.semapViewer.setAllClasses(true); document.body.classList.remove('hide-ui'); window.semapViewer.render(); });
+  await page.evaluate(() => {
+    for (const name of ['grid', 'graph']) window.semapViewer.setLayer(name, true);
+    window.semapViewer.setAllClasses(true);
+    document.body.classList.remove('hide-ui');
+    window.semapViewer.render();
+  });
 
   // 4. Click the first object's box: its panel shows the distribution and point count.
   if (result.objects > 0) {

@@ -5,14 +5,23 @@
 // the floor plane) unless a key says _W (world); metres, radians.
 //
 // Relations, each with its evidence:
-//   on(A, B)       A's bottom (lowest point) lies within on_tolerance_m of B's top (B an object,
-//                  or the floor at z = 0) and at least half of A's footprint cells overlap B's
-//                  box footprint (the floor: always). Of several candidates, the highest top
-//                  below or at A's bottom + tolerance wins: one support per object; an object
-//                  resting on nothing (wall-mounted, floating) has no `on`.
-//   in(A, B)       A's centroid lies inside B's box and A's box volume is under half of B's.
+//   on(A, B)       A's bottom (box bottom) lies within on_tolerance_m of B's support height
+//                  (support_height: the surface things rest on), B's support lies below the
+//                  centre of A's box and B's bottom below A's, and at least half of A's footprint cells overlap B's box footprint
+//                  grown by the tolerance. Of several candidates, the highest support wins: one
+//                  support per object. An object no other supports rests on the floor when the
+//                  floor was mapped and its bottom lies at most floor_support_max_gap_m above it
+//                  (a table's legs hidden by chairs); else (wall-mounted, on an unmapped counter)
+//                  it has no `on`.
+//   in(A, B)       A's box centre lies inside B's box, A's box volume is under half of B's,
+//                  A's top is at most on_tolerance_m above B's (a chair pushed under a table
+//                  sticks out) and A is not `on` B (a cup on a table is not in it).
 //   near(A, B)     centroids at most near_distance_m apart (A < B by id, listed once).
-//   in_place(A, P) the free cell nearest A's footprint centre belongs to place P.
+//   in_place(A, P) the room-space cell (navigation/places.hpp) nearest A's box centre belongs
+//                  to place P.
+// Nodes besides the objects: the floor (when the grid has free cells), the walls and ceiling
+// (navigation/structure.hpp) and the places (navigation/places.hpp). No relation ever has a
+// wall or the ceiling as its target: nothing is `on` a wall.
 #include <Eigen/Core>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -22,6 +31,8 @@
 #include "semap/core/pose.hpp"
 #include "semap/navigation/navigation_config.hpp"
 #include "semap/navigation/occupancy_grid.hpp"
+#include "semap/navigation/places.hpp"
+#include "semap/navigation/structure.hpp"
 #include "semap/objects/object_summary.hpp"
 
 namespace semap {
@@ -40,33 +51,26 @@ struct GravityBox {
 /// Vertical box around gravity-frame points: yaw from the footprint's principal axes, x-y extent
 /// of every point, z from the k-th lowest point (k = max(5, n / 500)) to the 98th percentile.
 GravityBox gravity_box(const std::vector<Eigen::Vector3d>& points_G);
+/// The largest connected part of an object's points: points joined through occupied cubes of
+/// kMainPartVoxelM (26-neighbourhood), the part holding most points. Stray fragments the object
+/// map attached (a chair's leg in a cup) then stretch neither box nor footprint.
+inline constexpr double kMainPartVoxelM = 0.04;
+std::vector<Eigen::Vector3d> main_part(const std::vector<Eigen::Vector3d>& points_G);
+/// Height of the surface things rest on: the densest horizontal layer (pair of kSupportBinM
+/// bins holding most points, their median height) among the points at or above the box's
+/// mid-height: a table's top, not the 98th percentile of the cups on it.
+inline constexpr double kSupportBinM = 0.02;
+double support_height(const std::vector<Eigen::Vector3d>& points_G, const GravityBox& box);
 
 struct SceneObjectNode {
   uint32_t id = 0;  ///< the object's id in objects.json
   std::string class_name;
   double confidence = 0.0;
   Eigen::Vector3d centroid_G = Eigen::Vector3d::Zero();
-  GravityBox box;
+  GravityBox box;                ///< of its main part (main_part)
+  double support_height_m = 0.0;  ///< support_height of its main part
   size_t point_count = 0;
-  std::vector<Eigen::Vector2d> footprint_G;  ///< centres of the grid cells its points cover (not serialised)
-};
-
-enum class SurfaceKind : uint8_t { kFloor, kWall, kCeiling };
-inline constexpr EnumNames<SurfaceKind, 3> kSurfaceKindNames{
-    {{SurfaceKind::kFloor, "floor"}, {SurfaceKind::kWall, "wall"}, {SurfaceKind::kCeiling, "ceiling"}}};
-
-struct SurfaceNode {
-  std::string id;  ///< "floor", "wall_<k>", "ceiling"
-  SurfaceKind kind = SurfaceKind::kFloor;
-  double height_m = 0.0;  ///< horizontal surfaces: height in G
-  double area_m2 = 0.0;   ///< observed area (floor: the free cells of the grid)
-};
-
-struct PlaceNode {
-  std::string id;  ///< "place_<k>"
-  double area_m2 = 0.0;
-  Eigen::Vector2d centroid_G = Eigen::Vector2d::Zero();
-  size_t cells = 0;
+  std::vector<Eigen::Vector2d> footprint_G;  ///< centres of the grid cells its main part covers (not serialised)
 };
 
 enum class Relation : uint8_t { kOn, kIn, kNear, kInPlace };
@@ -92,8 +96,9 @@ std::string object_node_id(uint32_t id);
 
 /// Builds nodes and edges (see the file comment). `grid` gives the floor's area, the places and
 /// the footprints; an empty grid gives none of them (objects and their mutual relations stay).
+/// `structure`: the walls and ceiling (fit_structural_surfaces), listed after the floor.
 SceneGraph build_scene_graph(const std::vector<ObjectSummary>& objects, const OccupancyGrid& grid,
-                             const NavigationConfig& config);
+                             const std::vector<SurfaceNode>& structure, const NavigationConfig& config);
 
 nlohmann::json to_json(const SceneGraph& graph);
 /// Reads a scene_graph.json document; throws semap::Error(source, what is wrong).

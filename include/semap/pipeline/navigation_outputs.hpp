@@ -24,7 +24,8 @@ struct NavigationMaps {
 };
 
 /// Gravity from the mesh and trajectory, then the grid from the Mapper's TSDF (read under its
-/// lock) and the scene graph of `objects`, with the Mapper's navigation config.
+/// lock), the walls and ceiling of the mesh (fit_structural_surfaces) and the scene graph of
+/// `objects`, with the Mapper's navigation config.
 NavigationMaps build_navigation_maps(const Mapper& mapper, const TriangleMesh& mesh, const Trajectory& trajectory,
                                      const std::vector<ObjectSummary>& objects);
 /// The same, reading mesh, trajectory and objects from the Mapper (Mapper-level accessor).
