@@ -8,7 +8,9 @@ if(SEMAP_CCACHE)
   if(SEMAP_CCACHE_PROGRAM)
     # Precompiled headers with ccache (ccache manual, "Precompiled headers"): the PCH's own
     # defines and time macros are not hashed, include-file times do not matter (a fresh clone
-    # has new ones), and CMake's clang PCH is built with -fno-pch-timestamp.
+    # has new ones), and CMake's clang PCH is built with -fno-pch-timestamp. That serves the gcc
+    # trees in any clone; a clang PCH still misses in a clone other than the one that filled the
+    # cache (its absolute paths), so the clang ASan tree builds without one (scripts/lib/asan-tree.sh).
     set(_semap_ccache_env CCACHE_SLOPPINESS=pch_defines,time_macros,include_file_mtime,include_file_ctime)
     set(CMAKE_C_COMPILER_LAUNCHER ${CMAKE_COMMAND} -E env ${_semap_ccache_env} ${SEMAP_CCACHE_PROGRAM})
     set(CMAKE_CXX_COMPILER_LAUNCHER ${CMAKE_COMMAND} -E env ${_semap_ccache_env} ${SEMAP_CCACHE_PROGRAM})

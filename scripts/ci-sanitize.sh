@@ -17,6 +17,7 @@ COMMON=(-G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEB
 SUPP="$PWD/scripts/sanitizer"
 source scripts/lib/ccache-env.sh
 source scripts/lib/asan-tree.sh
+source scripts/lib/ctest-costs.sh
 
 fail_on_reports() {  # $1: a log file
   # The count first: under pipefail, `grep | head` in the condition is false when head exits
@@ -51,6 +52,7 @@ if [ "${SEMAP_ASAN:-1}" = 1 ]; then
   t0=$SECONDS
   labels=$(IFS='|'; echo "^(${ASAN_FOLDERS[*]})$")
   log=$ASAN_BUILD/Testing/Temporary/LastTest.log
+  ctest_costs_restore "$ASAN_BUILD" asan
   if ! (cd "$ASAN_BUILD" && ctest -L "$labels" -LE heavy -E "$SAME_PATH_ONE_THREAD" --output-on-failure -j "$JOBS" --timeout 1200); then
     # LeakSanitizer's own stop-the-world tracer sometimes segfaults at exit after a test passed
     # (google/sanitizers#1353, open; seen here in two clean-clone runs, 2026-12-03, both times after a
@@ -65,6 +67,7 @@ if [ "${SEMAP_ASAN:-1}" = 1 ]; then
     (cd "$ASAN_BUILD" && ctest -R "^(${names})\$" --output-on-failure -j "$JOBS" --timeout 1200)
     fail_on_reports "$log.first"
   fi
+  ctest_costs_save "$ASAN_BUILD" asan
   fail_on_reports "$log"
   echo "semap sanitize: ASan+UBSan on ${ASAN_FOLDERS[*]} passed with no report ($((SECONDS - t0)) s)"
 fi

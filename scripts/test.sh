@@ -10,20 +10,24 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh clang libclang-rt-14-dev
 source scripts/lib/ccache-env.sh
+source scripts/lib/ctest-costs.sh
 start=$SECONDS
 ccache_zero
 bash scripts/build.sh
 echo "semap test: build in $((SECONDS - start)) s"
 ccache_report "release build"
 t0=$SECONDS
+ctest_costs_restore build release
 (cd build && ctest -LE heavy --output-on-failure -j "${SEMAP_JOBS:-$(nproc)}" --timeout 900)
 echo "semap test: fast suite in $((SECONDS - t0)) s"
+ctest_costs_save build release
 if [ "${SEMAP_QUICK:-0}" != 1 ]; then
   # The heavy tests that carry the product's claims and fit the CI budget (label ci_heavy:
   # demo figures, tracking against Open3D and on redkitchen, loop closure, object maps).
   t0=$SECONDS
   (cd build && ctest -L ci_heavy --output-on-failure -j "${SEMAP_JOBS:-$(nproc)}" --timeout 900)
   echo "semap test: heavy subset in $((SECONDS - t0)) s"
+  ctest_costs_save build release
   t0=$SECONDS
   ccache_zero
   bash scripts/ci-fuzz.sh

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "io/output_folder.hpp"
+#include "shared_fixture.hpp"
 #include "test_support.hpp"
 
 namespace semap::test {
@@ -201,11 +202,14 @@ inline bool wait_for_text(const fs::path& log, const std::string& text, double t
   return false;
 }
 
-/// A small `semap synth` dataset (12 frames, 160x120, 4 objects) at `dir`.
+/// A small `semap synth` dataset (12 frames, 160x120, 4 objects) at `dir`: a copy of one made
+/// once per build of build/semap, not once per test process (tests/shared_fixture.hpp).
 inline void make_small_dataset(const fs::path& dir) {
-  const auto r = run_semap({"synth", "--out", dir.string(), "--frames", "12", "--seed", "2", "--objects", "4",
-                            "--width", "160", "--height", "120"});
-  ASSERT_EQ(r.exit_code, 0) << r.output;
+  copy_shared_fixture("cli_12_frames_seed_2", semap_executable(), [](const fs::path& to) {
+    const auto r = run_semap({"synth", "--out", to.string(), "--frames", "12", "--seed", "2", "--objects", "4",
+                              "--width", "160", "--height", "120"});
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }, dir);
 }
 
 /// A suite of CLI tests over one small dataset made once (make_small_dataset) in a temp folder.

@@ -33,9 +33,7 @@ class BadInputCli : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     tmp_ = new test::TempDir("semap_bad_input");
-    const auto r = semap({"synth", "--out", (tmp_->path() / "clean").string(), "--frames", "12", "--seed", "2",
-                          "--objects", "4", "--width", "160", "--height", "120"});
-    ASSERT_EQ(r.exit_code, 0) << r.output;
+    test::make_small_dataset(clean());
   }
   static void TearDownTestSuite() {
     delete tmp_;
