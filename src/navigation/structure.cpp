@@ -147,7 +147,8 @@ std::vector<SurfaceNode> fit_walls(const std::vector<Patch>& patches, const Navi
       in = plane_inliers(patches, live, n, d, min_cos, config.wall_plane_tolerance_m);
     }
     if (in.empty()) {  // the peak's patches scatter over offsets: drop the peak bin's patches
-      std::erase_if(live, [&](size_t i) { return azimuth_bin(patches[i].normal_G.head<2>()) == bin; });
+      const int peak = bin;  // clang 14 cannot capture a structured binding
+      std::erase_if(live, [&](size_t i) { return azimuth_bin(patches[i].normal_G.head<2>()) == peak; });
       continue;
     }
     SurfaceNode w = wall_node(patches, in, n, d);

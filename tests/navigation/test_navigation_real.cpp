@@ -23,6 +23,7 @@
 #include "semap/navigation/scene_graph.hpp"
 #include "semap/pipeline/run_pipeline.hpp"
 #include "sequence_slices.hpp"
+#include "shared_fixture.hpp"
 #include "test_support.hpp"
 
 namespace semap {
@@ -72,20 +73,26 @@ class NavigationReal : public ::testing::Test {
     if (!std::filesystem::exists(dataset) || !std::filesystem::exists(semantic) || !std::filesystem::exists(instance))
       return;
     dir_ = new test::TempDir("semap_navigation_real");
-    test::SliceSpec spec;
-    spec.step = 2;
-    test::write_sequence_slice(dataset, spec, dir_->path() / "data");
-    RunOptions options;
-    options.dataset = dir_->path() / "data";
-    options.out_dir = dir_->path() / "out";
-    options.segmenter = "panoptic:" + semantic.string() + "+" + instance.string();  // the default models
-    options.show_progress = false;
-    run_pipeline(options, SemapConfig{});
-    map_ = new MapFile(read_map(options.out_dir));
-    graph_ = new SceneGraph(load_scene_graph(options.out_dir));
-    trajectory_ = new Trajectory(read_tum_trajectory(options.out_dir / "trajectory.txt"));
+    const std::filesystem::path out = dir_->path() / "out";
+    // One run per build of this binary, not one per test process (tests/shared_fixture.hpp).
+    test::copy_shared_fixture("navigation_real_redkitchen_step_2", "/proc/self/exe", [&](const std::filesystem::path& to) {
+      const test::TempDir slice("semap_navigation_real_slice");
+      test::SliceSpec spec;
+      spec.step = 2;
+      test::write_sequence_slice(dataset, spec, slice.path() / "data");
+      RunOptions options;
+      options.dataset = slice.path() / "data";
+      options.out_dir = to;
+      options.segmenter = "panoptic:" + semantic.string() + "+" + instance.string();  // the default models
+      options.show_progress = false;
+      run_pipeline(options, SemapConfig{});
+    }, out);
+    if (!std::filesystem::exists(out / "map.semap")) return;  // the fixture failed (reported)
+    map_ = new MapFile(read_map(out));
+    graph_ = new SceneGraph(load_scene_graph(out));
+    trajectory_ = new Trajectory(read_tum_trajectory(out / "trajectory.txt"));
     if (const char* keep = std::getenv("SEMAP_NAVIGATION_REAL_KEEP"))
-      std::filesystem::copy(options.out_dir, keep, std::filesystem::copy_options::recursive);
+      std::filesystem::copy(out, keep, std::filesystem::copy_options::recursive);
   }
   static void TearDownTestSuite() {
     delete trajectory_, delete graph_, delete map_, delete dir_;
