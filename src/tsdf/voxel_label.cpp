@@ -22,6 +22,20 @@ float min_lead_odds(const TsdfMap& map) {
                                                        0.9 * map.bayes().max_odds()));
 }
 
+/// Calls visit(i, block, li) for each point whose voxel was observed (TBB; the map must not
+/// change meanwhile).
+template <class Visit>
+void for_each_observed_voxel(const TsdfMap& map, const std::vector<Eigen::Vector3f>& points, Visit&& visit) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    CachedVoxelLookup lookup(map);
+    for (size_t i = r.begin(); i < r.end(); ++i) {
+      const Block* block = nullptr;
+      int li = 0;
+      if (lookup.observed(map.voxel_of_point(points[i]), &block, &li)) visit(i, *block, li);
+    }
+  });
+}
+
 }  // namespace
 
 VoxelLabelRule::VoxelLabelRule(const TsdfMap& map)
@@ -47,14 +61,8 @@ SurfaceLabelEvidence::SurfaceLabelEvidence(const TsdfMap& map, const std::vector
       min_odds_(min_lead_odds(map)) {
   if (!map.has_bayes_layer()) return;
   bytes_.assign(points.size() * stride_, 0);  // all zero = never labelled
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
-    CachedVoxelLookup lookup(map);
-    for (size_t i = r.begin(); i < r.end(); ++i) {
-      const Block* block = nullptr;
-      int li = 0;
-      if (lookup.observed(map.voxel_of_point(points[i]), &block, &li))
-        std::copy_n(&block->bayes[static_cast<size_t>(li) * stride_], stride_, &bytes_[i * stride_]);
-    }
+  for_each_observed_voxel(map, points, [&](size_t i, const Block& block, int li) {
+    std::copy_n(&block.bayes[static_cast<size_t>(li) * stride_], stride_, &bytes_[i * stride_]);
   });
 }
 
@@ -88,14 +96,7 @@ std::vector<ClassId> surface_labels(const TsdfMap& map, const std::vector<Eigen:
   std::vector<ClassId> out(points.size(), 0);
   if (!map.has_bayes_layer() && !map.has_label_layer()) return out;
   const VoxelLabelRule rule(map);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
-    CachedVoxelLookup lookup(map);
-    for (size_t i = r.begin(); i < r.end(); ++i) {
-      const Block* block = nullptr;
-      int li = 0;
-      if (lookup.observed(map.voxel_of_point(points[i]), &block, &li)) out[i] = rule.label(*block, li);
-    }
-  });
+  for_each_observed_voxel(map, points, [&](size_t i, const Block& block, int li) { out[i] = rule.label(block, li); });
   return out;
 }
 

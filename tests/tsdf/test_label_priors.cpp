@@ -179,19 +179,22 @@ struct CounterAndWall {
     counter_vertices = w.mesh.vertices.points.size();
     add_plane(w, V(0.51f, 0.01f, 0.31f), V(0, 0, 1.2f), V(0.5f, 0, 0), id(Label::kWall), 0, 1.0, 0.0, rng);
     mesh = std::move(w.mesh);
-    for (const Eigen::Vector3f& p : mesh.vertices.points) observe(map.voxel_of_point(p));
+    std::vector<Label> votes;
+    for (int frame = 0; frame < 10; ++frame) votes.push_back(frame % 5 < 3 ? Label::kWall : Label::kCabinet);
+    for (size_t v = 0; v < mesh.vertices.points.size(); ++v) set_votes(v, votes);
     mesh.vertices.labels = surface_labels(map, mesh.vertices.points);
   }
-  void observe(const VoxelIndex& v) {
-    Block& block = map.allocate_block(block_of_voxel(v));
-    const int li = local_index(v);
-    if (block.voxels[li].weight_q != 0) return;
+  /// Replaces the fused evidence of the voxel under vertex v by these frames' votes, in order.
+  void set_votes(size_t v, const std::vector<Label>& votes) {
+    const VoxelIndex voxel = map.voxel_of_point(mesh.vertices.points[v]);
+    Block& block = map.allocate_block(block_of_voxel(voxel));
+    const int li = local_index(voxel);
     block.voxels[li].weight_q = 1;
     uint8_t* bayes = &block.bayes[static_cast<size_t>(li) * map.bayes().bytes_per_voxel()];
+    std::fill_n(bayes, map.bayes().bytes_per_voxel(), 0);
     const float c = static_cast<float>(map.config().bayes_default_confidence);
-    for (int frame = 0; frame < 10; ++frame)
-      map.bayes().update(bayes, ClassDistribution::from_label(frame % 5 < 3 ? id(Label::kWall) : id(Label::kCabinet), c,
-                                                               map.config().bayes_confusion_classes));
+    for (Label vote : votes)
+      map.bayes().update(bayes, ClassDistribution::from_label(id(vote), c, map.config().bayes_confusion_classes));
   }
   double share(size_t from, size_t to, Label l) const {
     size_t n = 0;
@@ -220,16 +223,9 @@ TEST(LabelPriors, EvidenceTooThinAfterTheRuleLeavesTheVertexUnlabelled) {
   // does not lead the rest by mesh_min_label_frames frames, so it stays unlabelled, not guessed.
   CounterAndWall world;
   TsdfConfig strict = rules(true, true, false);
-  for (size_t v = 0; v < world.counter_vertices; ++v) {
-    const VoxelIndex voxel = world.map.voxel_of_point(world.mesh.vertices.points[v]);
-    Block* block = world.map.find_block(block_of_voxel(voxel));
-    uint8_t* bayes = &block->bayes[static_cast<size_t>(local_index(voxel)) * world.map.bayes().bytes_per_voxel()];
-    std::fill_n(bayes, world.map.bayes().bytes_per_voxel(), 0);
-    const float c = static_cast<float>(world.map.config().bayes_default_confidence);
-    for (int frame = 0; frame < 7; ++frame)
-      world.map.bayes().update(bayes, ClassDistribution::from_label(frame < 6 ? id(Label::kWall) : id(Label::kCabinet), c,
-                                                                     world.map.config().bayes_confusion_classes));
-  }
+  std::vector<Label> votes(6, Label::kWall);
+  votes.push_back(Label::kCabinet);
+  for (size_t v = 0; v < world.counter_vertices; ++v) world.set_votes(v, votes);
   world.mesh.vertices.labels = surface_labels(world.map, world.mesh.vertices.points);
   ASSERT_GT(world.share(0, world.counter_vertices, Label::kWall), 0.99);
   apply_label_priors(world.mesh, gravity(true), strict, SurfaceLabelEvidence(world.map, world.mesh.vertices.points));
