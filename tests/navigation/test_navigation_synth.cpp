@@ -14,7 +14,7 @@
 #include "semap/io/ply_io.hpp"
 #include "semap/navigation/scene_graph.hpp"
 #include "semap/pipeline/run_pipeline.hpp"
-#include "synth/synth_config.hpp"
+#include "synthetic_room.hpp"
 #include "test_support.hpp"
 
 using namespace semap;
@@ -66,13 +66,7 @@ class NavigationSynth : public ::testing::Test {
   static void SetUpTestSuite() {
     Progress::set_mode(-1);
     dir_ = new test::TempDir("semap_navigation");
-    SynthConfig synth;
-    synth.frames = 90;
-    synth.seed = 3;
-    synth.objects = 10;
-    synth.width = 320;
-    synth.height = 240;
-    generate_dataset(synth, dir_->path() / "data");
+    test::copy_small_synthetic_room(dir_->path() / "data");  // the pipeline suite's room
     RunOptions o;
     o.dataset = dir_->path() / "data";
     o.out_dir = dir_->path() / "out";

@@ -17,8 +17,7 @@
 #include "semap/pipeline/outputs.hpp"
 #include "pipeline/report_sections.hpp"
 #include "semap/pipeline/run_pipeline.hpp"
-#include "synth/synth_config.hpp"
-#include "shared_fixture.hpp"
+#include "synthetic_room.hpp"
 #include "test_support.hpp"
 #include "tsdf/map_io.hpp"
 
@@ -38,16 +37,7 @@ class PipelineTest : public ::testing::Test {
   static void SetUpTestSuite() {
     Progress::set_mode(-1);
     dir_ = new test::TempDir("semap_pipeline");
-    // Made once per build of this binary, not once per test process (tests/shared_fixture.hpp).
-    test::copy_shared_fixture("pipeline_90_frames_seed_3", "/proc/self/exe", [](const std::filesystem::path& to) {
-      SynthConfig synth;
-      synth.frames = 90;
-      synth.seed = 3;
-      synth.objects = 10;
-      synth.width = 320;
-      synth.height = 240;
-      generate_dataset(synth, to);
-    }, data());
+    test::copy_small_synthetic_room(data());  // once per build, not per test process
   }
   static void TearDownTestSuite() {
     delete dir_;
