@@ -147,6 +147,12 @@ class PyMapper {
     d["max_pose_correction_m"] = s.max_pose_correction_m, d["external_poses"] = s.external_poses;
     d["segmenter"] = s.segmenter;
     d["resumed_keyframes"] = s.resumed_keyframes, d["held_frames"] = s.held_frames;
+    // Issue 42: registrations verified and how often each check failed (report.json tracking.checks).
+    py::dict checks;
+    checks["verified"] = s.verified_registrations, checks["dense_residual_failed"] = s.dense_residual_failed;
+    checks["spread_failed"] = s.spread_failed, checks["ambiguous"] = s.ambiguous_matches;
+    checks["under_constrained"] = s.under_constrained;
+    d["tracking_checks"] = checks;
     return d;
   }
 

@@ -125,6 +125,11 @@ def test_stats_and_timings(tum_mapped):
     stats = mapper.stats()
     assert stats["frames"] == stats["frames_fused"] == TUM_SLICE and stats["finished"]
     assert stats["keyframes"] >= 2
+    # Every frame after the first was registered and verified (issue 42's checks, as report.json).
+    checks = stats["tracking_checks"]
+    assert checks["verified"] >= TUM_SLICE - 1 - stats["lost_frames"] and checks["verified"] > 0
+    assert set(checks) == {"verified", "dense_residual_failed", "spread_failed", "ambiguous",
+                           "under_constrained"}
     timings = mapper.timings()
     assert timings["tracking"]["count"] == TUM_SLICE and timings["tracking"]["mean_ms"] > 0
     assert "<semap.Mapper 30 frames" in repr(mapper)
