@@ -10,6 +10,7 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <functional>
@@ -23,8 +24,13 @@ namespace shared_fixture_detail {
 /// Holds an exclusive flock on `path` (created if absent) for its lifetime.
 class FileLock {
  public:
-  explicit FileLock(const std::filesystem::path& path) : fd_(::open(path.c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644)) {
-    if (fd_ >= 0) ::flock(fd_, LOCK_EX);
+  /// `wait` false: takes the lock only if nobody holds it (locked() says whether it did).
+  explicit FileLock(const std::filesystem::path& path, bool wait = true)
+      : fd_(::open(path.c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644)) {
+    if (fd_ >= 0 && ::flock(fd_, wait ? LOCK_EX : LOCK_EX | LOCK_NB) != 0) {
+      ::close(fd_);
+      fd_ = -1;
+    }
   }
   ~FileLock() {
     if (fd_ >= 0) ::close(fd_);  // closing releases the lock, also when the process dies
@@ -51,6 +57,33 @@ inline std::string entry_name(const std::string& key, const std::filesystem::pat
   std::snprintf(hashes, sizeof hashes, "%016zx",
                 std::hash<std::string>{}(std::to_string(size) + ":" + std::to_string(static_cast<long long>(mtime))));
   return *prefix + hashes;
+}
+
+/// Folders unused for this long are another clone's (CI clones each run into a new folder, and
+/// the maker's path is part of every name): removed, so the cache does not grow per clone.
+constexpr auto kUnusedFor = std::chrono::hours(72);
+
+/// Removes the folders of other makers that nobody used for kUnusedFor, each under its maker's
+/// lock taken without waiting (a maker at work keeps its folders).
+inline void remove_unused_entries(const std::filesystem::path& root, const std::string& own_prefix) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const auto now = fs::file_time_type::clock::now();
+  for (const auto& lock_file : fs::directory_iterator(root, ec)) {
+    const std::string lock_name = lock_file.path().filename().string();
+    const size_t suffix = lock_name.size() >= 4 ? lock_name.size() - 4 : std::string::npos;
+    if (suffix == std::string::npos || lock_name.compare(suffix, 4, "lock") != 0) continue;
+    const std::string prefix = lock_name.substr(0, suffix);
+    if (prefix == own_prefix) continue;
+    FileLock lock(lock_file.path(), /*wait=*/false);
+    if (!lock.locked()) continue;
+    for (const auto& entry : fs::directory_iterator(root, ec)) {
+      const std::string name = entry.path().filename().string();
+      if (name.rfind(prefix, 0) != 0 || name == lock_name) continue;
+      const auto used = fs::last_write_time(entry.path(), ec);
+      if (!ec && now - used > kUnusedFor) fs::remove_all(entry.path(), ec);
+    }
+  }
 }
 
 }  // namespace shared_fixture_detail
@@ -88,7 +121,10 @@ inline void copy_shared_fixture(const std::string& key, const std::filesystem::p
         if (other_name.rfind(prefix, 0) == 0 && other_name != name && other_name != prefix + "lock")
           fs::remove_all(other.path());  // made by an earlier build of the same maker
       }
+      shared_fixture_detail::remove_unused_entries(root, prefix);
     }
+    std::error_code ec;
+    fs::last_write_time(entry, fs::file_time_type::clock::now(), ec);  // in use: kept by other clones' sweeps
   }
   fs::copy(entry, dest, fs::copy_options::recursive);
 }
