@@ -7,6 +7,8 @@
 #include <utility>
 #include <vector>
 
+#include "core/graph_segmentation.hpp"  // WeightedEdge, felzenszwalb_cluster (C2.5)
+
 namespace semap {
 
 struct SupervoxelNode {
@@ -22,11 +24,6 @@ struct SupervoxelNode {
 struct SupervoxelGraph {
   std::vector<SupervoxelNode> nodes;
   std::vector<std::pair<int, int>> edges;  ///< adjacency, each pair once with first < second
-};
-
-struct WeightedEdge {
-  int a = 0, b = 0;
-  float weight = 0.f;
 };
 
 struct SupportPlaneParams {
@@ -62,10 +59,6 @@ float geometric_weight(int plane_i, int plane_j, const Eigen::Vector3f& n_i, con
 /// Support planes (C2.4): region growing over adjacent low-curvature supervoxels with similar
 /// normals lying on one plane. Returns l_i per node (1-based, 0 = none).
 std::vector<int> assign_support_planes(const SupervoxelGraph& graph, const SupportPlaneParams& params);
-
-/// Felzenszwalb-Huttenlocher (C2.5): merge along increasing weight while
-/// w <= min(Int(C1) + k/|C1|, Int(C2) + k/|C2|). Returns a component id (0..C-1) per node.
-std::vector<int> felzenszwalb_cluster(int num_nodes, std::vector<WeightedEdge> edges, float k);
 
 /// Jensen-Shannon divergence in nats (C5); inputs are distributions of equal size.
 double js_divergence(const std::vector<double>& p, const std::vector<double>& q);

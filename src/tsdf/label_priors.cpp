@@ -5,6 +5,8 @@
 #include <numbers>
 #include <vector>
 
+#include "core/graph_segmentation.hpp"
+
 namespace semap {
 
 namespace {
@@ -156,6 +158,66 @@ ClassId region_class(const TriangleMesh& mesh, const Geometry& g, const Region& 
   return best != 0 && area[best] >= c.label_prior_region_min_share * fitting ? best : 0;
 }
 
+/// ScanNet's mesh segmentation uses segments of at least 20 vertices; smaller ones join a neighbour.
+constexpr int kMinSegmentVertices = 20;
+
+/// Smooth segments (file comment): Felzenszwalb-Huttenlocher over the mesh's vertex edges, each
+/// weighted by the normal difference 1 - n_u.n_v. Returns a segment id per vertex.
+std::vector<int> smooth_segments(const TriangleMesh& mesh, const Geometry& g, double k) {
+  std::vector<WeightedEdge> edges;
+  edges.reserve(mesh.triangles.size() * 3);
+  for (const auto& tri : mesh.triangles)
+    for (int i = 0; i < 3; ++i) {
+      const uint32_t a = tri[i], b = tri[(i + 1) % 3];
+      edges.push_back({static_cast<int>(a), static_cast<int>(b),
+                       static_cast<float>(1.0 - g.vertex_normal[a].dot(g.vertex_normal[b]))});
+    }
+  return felzenszwalb_cluster(static_cast<int>(mesh.vertices.points.size()), std::move(edges), static_cast<float>(k),
+                              kMinSegmentVertices);
+}
+
+/// The segments' rule (file comment) on the vertices still unlabelled: `fits(v, class)` says
+/// whether the class fits vertex v's surface. Returns how many it labelled.
+template <typename Fits>
+size_t fill_from_segments(TriangleMesh& mesh, const Geometry& g, const TsdfConfig& c, const Fits& fits) {
+  auto& labels = mesh.vertices.labels;
+  const size_t nv = labels.size();
+  const std::vector<int> segment = smooth_segments(mesh, g, c.label_prior_segment_k);
+  const int num_segments = segment.empty() ? 0 : *std::max_element(segment.begin(), segment.end()) + 1;
+  // The vertices of each segment (CSR), and each vertex's area: a third of its triangles'.
+  std::vector<uint32_t> first(num_segments + 1, 0), members(nv);
+  for (int s : segment) ++first[s + 1];
+  for (int s = 0; s < num_segments; ++s) first[s + 1] += first[s];
+  std::vector<uint32_t> fill(first.begin(), first.end() - 1);
+  for (size_t v = 0; v < nv; ++v) members[fill[segment[v]]++] = static_cast<uint32_t>(v);
+  std::vector<double> vertex_area(nv, 0.0);
+  for (size_t v = 0; v < nv; ++v)
+    for (uint32_t k = g.first[v]; k < g.first[v + 1]; ++k) vertex_area[v] += g.area_m2[g.incident[k]] / 3.0;
+
+  size_t filled = 0;
+  std::vector<double> area(kNumClasses);
+  for (int s = 0; s < num_segments; ++s) {
+    std::fill(area.begin(), area.end(), 0.0);
+    double total = 0.0, labelled = 0.0;
+    for (uint32_t k = first[s]; k < first[s + 1]; ++k) {
+      const uint32_t v = members[k];
+      total += vertex_area[v];
+      if (labels[v] != 0 && labels[v] < kNumClasses) area[labels[v]] += vertex_area[v], labelled += vertex_area[v];
+    }
+    const ClassId best = static_cast<ClassId>(std::max_element(area.begin(), area.end()) - area.begin());
+    if (best == 0 || labelled < c.label_prior_segment_min_labelled * total ||
+        area[best] < c.label_prior_region_min_share * labelled)
+      continue;
+    for (uint32_t k = first[s]; k < first[s + 1]; ++k) {
+      const uint32_t v = members[k];
+      if (labels[v] != 0 || !fits(v, best)) continue;
+      labels[v] = best;
+      ++filled;
+    }
+  }
+  return filled;
+}
+
 }  // namespace
 
 LabelPriorStats apply_label_priors(TriangleMesh& mesh, const GravityEstimate& gravity, const TsdfConfig& c,
@@ -163,7 +225,8 @@ LabelPriorStats apply_label_priors(TriangleMesh& mesh, const GravityEstimate& gr
   LabelPriorStats stats;
   auto& labels = mesh.vertices.labels;
   if (labels.size() != mesh.vertices.points.size() || mesh.triangles.empty()) return stats;
-  if (!c.label_prior_normals && !c.label_prior_heights && !c.label_prior_regions) return stats;
+  if (!c.label_prior_normals && !c.label_prior_heights && !c.label_prior_regions && !c.label_prior_segments)
+    return stats;
   const ClassRules rules{c.label_prior_normals, c.label_prior_heights, c.label_prior_floor_band_m,
                          c.label_prior_min_ceiling_height_m};
   const double tilt = c.label_prior_max_tilt_deg * std::numbers::pi / 180.0;
@@ -230,6 +293,11 @@ LabelPriorStats apply_label_priors(TriangleMesh& mesh, const GravityEstimate& gr
     labels[v] = evidence.label_excluding(v, ruled_out);
     stats.refitted += labels[v] != 0;
   }
+  if (c.label_prior_segments)
+    stats.segment_filled = fill_from_segments(mesh, g, c, [&](uint32_t v, ClassId cls) {
+      const Facing f = facing(g.vertex_normal[v], up, cos_tilt, sin_tilt);
+      return rules.fits(cls, f, height_of(mesh.vertices.points[v].cast<double>()));
+    });
   return stats;
 }
 

@@ -26,6 +26,14 @@
 //    (SurfaceLabelEvidence) shows once those classes are impossible: the posterior conditioned on
 //    the geometry, decided by the same thresholds as every label. A horizontal counter that the
 //    network calls wall about as often as cabinet becomes cabinet, not unlabelled.
+//  - segments: the mesh is cut into smooth segments where its normal turns (Felzenszwalb-
+//    Huttenlocher over vertex edges weighted 1 - n_u.n_v, K = segment_k, at least 20 vertices,
+//    as ScanNet segments its meshes for labelling). In a segment whose labelled area is at least
+//    segment_min_labelled of its area and whose largest class holds region_min_share of that,
+//    the class labels the vertices still unlabelled where it fits their surface (normal and
+//    height rules). Parts the network saw too rarely or too uncertainly for the per-voxel
+//    thresholds take the class of the surface they belong to; a segment boundary (an edge, a
+//    corner, a change of curvature) stops it, as labels in a person's annotation stop there.
 #include <cstddef>
 
 #include "semap/core/gravity.hpp"
@@ -41,6 +49,7 @@ struct LabelPriorStats {
   size_t filled = 0;         ///< vertices given their region's class (from unlabelled or contradicting)
   size_t replaced = 0;       ///< object labels in a wall/floor/ceiling plane given its class
   size_t refitted = 0;       ///< vertices given the class their evidence shows among the fitting ones
+  size_t segment_filled = 0; ///< unlabelled vertices given their smooth segment's class
   size_t regions = 0;        ///< regions that decided a class
   double region_area_m2 = 0.0;  ///< their area
 };

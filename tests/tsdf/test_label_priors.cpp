@@ -86,11 +86,12 @@ double vertex_accuracy(const World& w) {
   return double(ok) / w.truth.size();
 }
 
-TsdfConfig rules(bool normals, bool heights, bool regions) {
+TsdfConfig rules(bool normals, bool heights, bool regions, bool segments = false) {
   TsdfConfig c;
   c.label_prior_normals = normals;
   c.label_prior_heights = heights;
   c.label_prior_regions = regions;
+  c.label_prior_segments = segments;
   return c;
 }
 
@@ -160,6 +161,89 @@ TEST(LabelPriors, AllRulesOffChangeNothing) {
   const LabelPriorStats s = apply_label_priors(w.mesh, gravity(true), rules(false, false, false));
   EXPECT_EQ(w.mesh.vertices.labels, before);
   EXPECT_EQ(s.filled + s.replaced + s.contradicting + s.refitted, 0u);
+}
+
+/// One connected sheet at a TSDF mesh's spacing (2 cm), bent along a profile: the cross-section
+/// points `profile` (metres, in the x-z plane) swept 0.6 m along y. Vertex k of the profile has
+/// truth `truth[k]`; its observed label is drawn per 10 cm tile: the truth with p_seen, else
+/// unlabelled.
+World bent_sheet(const std::vector<Eigen::Vector2f>& profile, const std::vector<ClassId>& truth, double p_seen,
+                 uint32_t seed) {
+  World w;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  const int ny = 30, tile = 5;
+  std::vector<bool> seen(((profile.size() / tile) + 1) * (ny / tile + 1));
+  for (size_t t = 0; t < seen.size(); ++t) seen[t] = uni(rng) < p_seen;
+  for (size_t k = 0; k < profile.size(); ++k)
+    for (int j = 0; j <= ny; ++j) {
+      w.mesh.vertices.points.emplace_back(profile[k].x(), 0.02f * j, profile[k].y());
+      w.truth.push_back(truth[k]);
+      w.mesh.vertices.labels.push_back(seen[(k / tile) * (ny / tile + 1) + j / tile] ? truth[k] : ClassId(0));
+    }
+  const auto at = [&](size_t k, int j) { return static_cast<uint32_t>(k * (ny + 1) + j); };
+  for (size_t k = 0; k + 1 < profile.size(); ++k)
+    for (int j = 0; j < ny; ++j) {  // wound so that the normals face +z on a horizontal stretch
+      w.mesh.triangles.push_back({at(k, j), at(k + 1, j), at(k + 1, j + 1)});
+      w.mesh.triangles.push_back({at(k, j), at(k + 1, j + 1), at(k, j + 1)});
+    }
+  return w;
+}
+
+double share_of_truth(const World& w, ClassId truth, ClassId label) {
+  size_t n = 0, hit = 0;
+  for (size_t v = 0; v < w.truth.size(); ++v)
+    if (w.truth[v] == truth) ++n, hit += w.mesh.vertices.labels[v] == label;
+  return double(hit) / double(n);
+}
+
+TEST(LabelPriors, SegmentsFillASmoothSurfaceAndStopAtItsCrease) {
+  // A sofa seat curving up into its back (one smooth surface: a quarter circle of 0.3 m), then a
+  // crease into the top of a cabinet behind it. The network saw 40 % of the tiles of each.
+  std::vector<Eigen::Vector2f> profile;
+  std::vector<ClassId> truth;
+  const auto add = [&](float x, float z, Label l) { profile.emplace_back(x, z), truth.push_back(id(l)); };
+  for (int i = 25; i >= 0; --i) add(-0.02f * i, 0.45f, Label::kSofa);  // seat, faces up
+  for (int i = 1; i <= 24; ++i) {
+    const float a = 1.5708f * i / 24.f;
+    add(0.3f * std::sin(a), 0.75f - 0.3f * std::cos(a), Label::kSofa);
+  }
+  for (int i = 1; i <= 15; ++i) add(0.3f, 0.75f + 0.02f * i, Label::kSofa);        // back, vertical
+  for (int i = 1; i <= 30; ++i) add(0.3f + 0.02f * i, 1.05f, Label::kCabinet);    // crease: cabinet top
+  World w = bent_sheet(profile, truth, 0.4, 11);
+  const double seen_before = share_of_truth(w, id(Label::kSofa), id(Label::kSofa));
+  const LabelPriorStats s = apply_label_priors(w.mesh, gravity(false), rules(true, true, false, true));
+  EXPECT_LT(seen_before, 0.6);
+  EXPECT_GT(share_of_truth(w, id(Label::kSofa), id(Label::kSofa)), 0.95);  // filled along the curve
+  EXPECT_GT(share_of_truth(w, id(Label::kCabinet), id(Label::kCabinet)), 0.9);
+  EXPECT_LT(share_of_truth(w, id(Label::kCabinet), id(Label::kSofa)), 0.05);  // not across the crease
+  EXPECT_GT(s.segment_filled, 0u);
+}
+
+TEST(LabelPriors, SegmentsNeedEnoughLabelledAreaAndAFittingClass) {
+  // A floor (horizontal) seen as floor on 10 % of its tiles only: too little to decide.
+  std::vector<Eigen::Vector2f> profile;
+  for (int i = 0; i <= 60; ++i) profile.emplace_back(0.02f * i, 0.0f);
+  World sparse = bent_sheet(profile, std::vector<ClassId>(profile.size(), id(Label::kFloor)), 0.1, 5);
+  const double before = share_of_truth(sparse, id(Label::kFloor), id(Label::kFloor));
+  apply_label_priors(sparse.mesh, gravity(true), rules(true, true, false, true));
+  EXPECT_NEAR(share_of_truth(sparse, id(Label::kFloor), id(Label::kFloor)), before, 1e-9);
+  // A floor seen on 60 % of its tiles that bends smoothly into a 35-degree ramp: one segment, but
+  // floor does not fit the ramp's surface (tilt, height), so only the floor's gaps are filled.
+  std::vector<Eigen::Vector2f> ramp;
+  std::vector<ClassId> truth;
+  for (int i = 0; i <= 40; ++i) ramp.emplace_back(0.02f * i, 0.0f), truth.push_back(id(Label::kFloor));
+  float x = 0.8f, z = 0.0f;
+  for (int i = 1; i <= 30; ++i) {
+    const float a = 0.61f * std::min(1.0f, i / 10.0f);  // bends over 10 steps, then straight
+    x += 0.02f * std::cos(a), z += 0.02f * std::sin(a);
+    ramp.emplace_back(x, z), truth.push_back(a < 0.3f ? id(Label::kFloor) : ClassId(0));  // < 17 deg
+  }
+  World w = bent_sheet(ramp, truth, 0.6, 9);
+  const double floor_before = share_of_truth(w, id(Label::kFloor), id(Label::kFloor));
+  apply_label_priors(w.mesh, gravity(true), rules(true, true, false, true));
+  EXPECT_GT(share_of_truth(w, id(Label::kFloor), id(Label::kFloor)), std::max(0.9, floor_before));
+  EXPECT_EQ(share_of_truth(w, 0, 0), 1.0);  // the ramp stays unlabelled
 }
 
 /// A counter top (horizontal, 0.9 m above the floor) and a wall beside it, both seen in ten

@@ -72,6 +72,9 @@ struct TsdfConfig {
   double label_prior_region_plane_m = 0.04;     ///< region: triangle centroid within this of its plane
   double label_prior_region_min_area_m2 = 0.25; ///< smaller regions decide nothing
   double label_prior_region_min_share = 0.5;    ///< the region's class holds this share of its labelled area
+  bool label_prior_segments = true;             ///< smooth segments' fitting majority fills their unlabelled parts
+  double label_prior_segment_k = 0.01;          ///< Felzenszwalb-Huttenlocher K on normal differences (1 - cos)
+  double label_prior_segment_min_labelled = 0.3;  ///< a segment decides when this share of its area is labelled
 
   // Memory for long runs.
   double drop_distance = 0.0;  ///< blocks farther than this from the camera are freed, m (0 = keep all)
@@ -130,6 +133,12 @@ struct TsdfConfig {
     v.param("label_prior_region_plane_m", label_prior_region_plane_m, "m", "region growing: centroid within this of the region's plane", positive(1.0));
     v.param("label_prior_region_min_area_m2", label_prior_region_min_area_m2, "m^2", "regions smaller than this decide nothing", non_negative(1e6));
     v.param("label_prior_region_min_share", label_prior_region_min_share, "", "a region's class holds at least this share of its labelled area", {0.0, 1.0});
+    v.param("label_prior_segments", label_prior_segments, "",
+            "mesh labels: a smooth segment's majority class labels its unlabelled vertices where it fits their surface");
+    v.param("label_prior_segment_k", label_prior_segment_k, "",
+            "smooth segments: Felzenszwalb-Huttenlocher K on the normal difference 1 - cos (larger: larger segments)", {1e-5, 1.0});
+    v.param("label_prior_segment_min_labelled", label_prior_segment_min_labelled, "",
+            "a smooth segment decides only when at least this share of its area is labelled", {0.0, 1.0});
     v.param("drop_distance", drop_distance, "m", "free blocks farther than this from the camera (0 = never)", non_negative(1e6));
   }
   void validate() const {
