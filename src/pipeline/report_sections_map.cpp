@@ -120,7 +120,7 @@ std::string object_cards_section(const std::vector<ObjectCard>& cards) {
   h += "<p class=\"explain\">Each object of the final map: class, detector confidence (mean score of the "
        "detections merged into it, 0-100 %), size of its box in metres (longest side first), and a crop of the "
        "keyframe that saw it best (largest unoccluded view of it); an object no kept keyframe showed (e.g. from a "
-       "resumed map) is drawn from its coloured voxels instead.</p>\n<div class=\"cards\">\n";
+       "map saved by an older semap) is drawn from its coloured voxels instead.</p>\n<div class=\"cards\">\n";
   for (const ObjectCard& c : cards) h += object_card(c);
   return h + "</div>\n";
 }
