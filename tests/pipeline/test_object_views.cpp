@@ -163,6 +163,7 @@ TEST_F(ObjectViewsTest, ResumedAndMergedMapsKeepTheirViews) {
               kept.size(), shown);
   EXPECT_GE(kept.size(), objects * 8 / 10) << "the saved views survive the resumed run";
   EXPECT_EQ(shown, kept.size()) << "every kept view is a card's thumbnail";
+  EXPECT_NE(html.find("Continued a saved map of "), std::string::npos) << "the summary says it was resumed";
 
   // Merged: A has no objects (no segmenter), B's objects join it with A's ids and B's views.
   map_room("bare", 30, "none");
