@@ -163,8 +163,8 @@ class Mapper {
   const SemapConfig& config() const;
   const CameraModel& camera() const;
   /// Writes the whole map (map.semap, versioned, checksummed) atomically: the TSDF with its
-  /// label layers, the object map, the keyframe database and pose graph (tracked runs), the
-  /// camera and the configuration. load() continues it.
+  /// label layers, the object map with each object's best view, the keyframe database and pose
+  /// graph (tracked runs), the camera and the configuration. load() continues it.
   void save(const std::filesystem::path& path) const;
   /// The same with sections of other stages added (issue 39: "gravity"); a name the Mapper
   /// writes itself is not replaced.

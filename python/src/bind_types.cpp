@@ -160,6 +160,9 @@ void bind_object(py::module_& m) {
       .def_readonly("first_frame", &ObjectSummary::first_frame)
       .def_readonly("last_frame", &ObjectSummary::last_frame)
       .def_readonly("state", &ObjectSummary::state)
+      .def_property_readonly("view_jpeg", [](const ObjectSummary& o) { return py::bytes(o.best_view_jpeg); },
+                             "bytes: JPEG crop (longest side <= 96 px) of the keyframe that saw the object best, "
+                             "as report.html's card shows it; kept in map.semap; b'' when no keyframe showed it")
       .def("to_json", [](const ObjectSummary& o) { return to_json(o).dump(); }, "the objects.json entry as text");
 }
 

@@ -1,6 +1,7 @@
 #pragma once
 // map.semap container (issue 19): a versioned, checksummed file of named sections, one per
-// stage (tsdf, tracking, objects, camera, config), each encoded by its own stage.
+// stage (tsdf, tracking, objects, object_views, camera, config), each encoded by its own stage;
+// a reader skips a section it does not know and tolerates an optional one being absent.
 //   "SEMAPMAP" | u32 version | u32 section count | per section: u32 name bytes, name,
 //   u64 payload bytes, u64 stored bytes, the payload DEFLATE-compressed (libdeflate) |
 //   u64 FNV-1a of everything after the version

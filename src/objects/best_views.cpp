@@ -6,6 +6,8 @@
 #include <opencv2/imgproc.hpp>
 #include <unordered_set>
 
+#include "core/archive.hpp"
+
 namespace semap {
 namespace {
 
@@ -13,6 +15,7 @@ constexpr size_t kMaxScoredPoints = 400;  ///< points per instance projected to 
 constexpr size_t kMinVisiblePoints = 8;   ///< fewer visible points: no view
 constexpr double kCropMargin = 0.15;      ///< crop border around the visible points, share of the box side
 constexpr int kJpegQuality = 85;
+constexpr uint32_t kViewsFormat = 1;  ///< kObjectViewsSection layout (best_views.hpp)
 
 /// The pixel box of the instance's points visible in this frame and their share of the points.
 struct Visibility {
@@ -65,10 +68,14 @@ std::string encode_crop(const cv::Mat& rgb, const cv::Rect2d& box, const Pinhole
 
 }  // namespace
 
-void BestViews::update(const std::vector<ObjectInstance>& instances, const Frame& frame, const Pose& T_world_camera) {
+void BestViews::forget_all_but(const std::vector<ObjectInstance>& instances) {
   std::unordered_set<uint32_t> alive;
   for (const ObjectInstance& o : instances) alive.insert(o.id);
   std::erase_if(views_, [&](const auto& entry) { return !alive.count(entry.first); });
+}
+
+void BestViews::update(const std::vector<ObjectInstance>& instances, const Frame& frame, const Pose& T_world_camera) {
+  forget_all_but(instances);
   if (frame.rgb.empty() || frame.depth.type() != CV_32FC1 || frame.depth.cols != camera_.width ||
       frame.depth.rows != camera_.height)
     return;
@@ -80,8 +87,8 @@ void BestViews::update(const std::vector<ObjectInstance>& instances, const Frame
     View& kept = views_[o.id];
     if (score <= kept.score) continue;
     std::string jpeg = encode_crop(frame.rgb, v.box, camera_);
-    if (jpeg.empty()) continue;
-    kept = {score, std::move(jpeg)};
+    if (jpeg.empty() || jpeg.size() > kBestViewMaxJpegBytes) continue;
+    kept = {score, frame.index, std::move(jpeg)};
   }
 }
 
@@ -94,6 +101,70 @@ size_t BestViews::bytes() const {
   size_t n = 0;
   for (const auto& [id, view] : views_) n += view.jpeg.size();
   return n;
+}
+
+std::string BestViews::encode(const std::vector<ObjectInstance>& instances) const {
+  // Only the views of saved objects: a file the reader (decode) refuses is never written.
+  std::vector<uint32_t> ids;
+  for (const ObjectInstance& o : instances)
+    if (views_.count(o.id)) ids.push_back(o.id);
+  std::sort(ids.begin(), ids.end());
+  ByteWriter w;
+  w.put(kViewsFormat);
+  w.put(static_cast<uint64_t>(ids.size()));
+  for (const uint32_t id : ids) {
+    const View& view = views_.at(id);
+    w.put(id), w.put(view.score), w.put(view.keyframe_index);
+    w.put_string(view.jpeg);
+  }
+  return std::move(w.bytes());
+}
+
+void BestViews::decode(std::string_view bytes, const std::filesystem::path& path,
+                       const std::vector<uint32_t>& alive_ids) {
+  ByteReader r(bytes, path, kObjectViewsSection);
+  const uint32_t format = r.get<uint32_t>();
+  if (format != kViewsFormat)
+    r.fail("object views format " + std::to_string(format) + ", this build reads " + std::to_string(kViewsFormat));
+  const std::unordered_set<uint32_t> alive(alive_ids.begin(), alive_ids.end());
+  constexpr size_t kMinViewBytes = 4 + 8 + 8 + 8;
+  const size_t count = r.get_count(kMinViewBytes);  // bounded by the bytes there, before any allocation
+  std::unordered_map<uint32_t, View> views;
+  uint32_t previous_id = 0;
+  for (size_t i = 0; i < count; ++i) {
+    const uint32_t id = r.get<uint32_t>();
+    if (id <= previous_id) r.fail("object view ids are not ascending");
+    if (!alive.count(id)) r.fail("a view of object " + std::to_string(id) + ", which the object map does not hold");
+    previous_id = id;
+    View view;
+    view.score = r.get<double>();
+    if (!std::isfinite(view.score) || view.score <= 0.0) r.fail("a view's score is not a positive number");
+    view.keyframe_index = r.get<uint64_t>();
+    const uint64_t jpeg_bytes = r.get<uint64_t>();
+    if (jpeg_bytes > kBestViewMaxJpegBytes)
+      r.fail("a view of " + std::to_string(jpeg_bytes) + " bytes (at most " + std::to_string(kBestViewMaxJpegBytes) +
+             ")");
+    const std::string_view jpeg = r.get_view(static_cast<size_t>(jpeg_bytes));
+    // SOI ... EOI: what cv::imencode writes; the report embeds the bytes as they are.
+    if (jpeg.size() < 4 || !jpeg.starts_with("\xFF\xD8") || !jpeg.ends_with("\xFF\xD9")) r.fail("a view is not a JPEG");
+    view.jpeg = std::string(jpeg);
+    views.emplace(id, std::move(view));
+  }
+  r.expect_end();
+  views_ = std::move(views);
+}
+
+void BestViews::merge(const BestViews& other, const std::unordered_map<uint32_t, uint32_t>& ids) {
+  // In id order: two of its objects may fold into one here, and ties must not depend on hashing.
+  std::vector<std::pair<uint32_t, const View*>> others;
+  for (const auto& [other_id, view] : other.views_) others.emplace_back(other_id, &view);
+  std::sort(others.begin(), others.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const auto& [other_id, view] : others) {
+    const auto it = ids.find(other_id);
+    if (it == ids.end()) continue;
+    View& kept = views_[it->second];
+    if (view->score > kept.score) kept = *view;
+  }
 }
 
 }  // namespace semap

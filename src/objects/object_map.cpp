@@ -485,9 +485,11 @@ ObjectMapMergeCounts ObjectMap::merge_map(const ObjectMap& other, const Eigen::I
       moved.id = 0;  // merge_into must not match it against into's co-association ids
       merge_into(into, moved);
       into.state = std::max(into.state, moved.state);
+      counts.ids[source.id] = into.id;
       ++counts.merged;
     } else {
       moved.id = next_id_++;
+      counts.ids[source.id] = moved.id;
       instances_.push_back(std::move(moved));
       ++counts.added;
     }

@@ -76,6 +76,7 @@ Eigen::AlignedBox3f trimmed_box(const std::vector<Eigen::Vector3f>& points, doub
 struct ObjectMapMergeCounts {
   size_t merged = 0;  ///< instances of the other map folded into one of this map
   size_t added = 0;   ///< instances of the other map added as new objects
+  std::unordered_map<uint32_t, uint32_t> ids;  ///< other map's instance id -> the id it has here
 };
 
 struct OptimisationStats {

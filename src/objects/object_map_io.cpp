@@ -127,11 +127,27 @@ void ObjectMapper::restore_state(std::string_view bytes, const std::filesystem::
   step_ = saved.step;
 }
 
+namespace {
+std::vector<uint32_t> ids_of(const std::vector<ObjectInstance>& instances) {
+  std::vector<uint32_t> ids;
+  for (const ObjectInstance& inst : instances) ids.push_back(inst.id);
+  return ids;
+}
+}  // namespace
+
+void ObjectMapper::restore_views(std::string_view bytes, const std::filesystem::path& path) {
+  best_views_.decode(bytes, path, ids_of(map_.instances()));
+}
+
 ObjectMapMergeCounts ObjectMapper::merge_state(std::string_view bytes, const std::filesystem::path& path,
-                                               const Eigen::Isometry3f& T_this_other) {
+                                               const Eigen::Isometry3f& T_this_other, const std::string* views_bytes) {
   ObjectMap other(config_);
   other.decode_state(read_mapper_section(bytes, path).map_bytes, path);
-  return map_.merge_map(other, T_this_other);
+  BestViews other_views(best_views_.camera());
+  if (views_bytes) other_views.decode(*views_bytes, path, ids_of(other.instances()));
+  ObjectMapMergeCounts counts = map_.merge_map(other, T_this_other);
+  if (views_bytes) best_views_.merge(other_views, counts.ids);
+  return counts;
 }
 
 }  // namespace semap

@@ -33,7 +33,9 @@ void ObjectMapper::process(const Frame& frame, const SegmentationResult& segment
     ++timings_.optimisations;
   }
   timings_.association_ms += ms_since(t1);
+  const auto t2 = std::chrono::steady_clock::now();
   best_views_.update(map_.instances(), frame, T_world_camera);
+  timings_.best_views_ms += ms_since(t2);
   ++timings_.frames;
 }
 
@@ -51,6 +53,7 @@ void ObjectMapper::finish() {
   if (config_.enable_optimisation && config_.final_optimisation && step_ % config_.optimise_every != 0) {
     optimisation_log_.push_back(map_.optimise(step_, true));
     ++timings_.optimisations;
+    best_views_.forget_all_but(map_.instances());  // the views of objects this pass removed
   }
   const ObjectMapCounts c = counts();
   spdlog::debug("object map (C4, C5): {} instances created, {} folded at association, {} deleted ({} absorbed), "

@@ -24,6 +24,7 @@ struct ObjectMapperTimings {
   double segmentation_ms = 0.0;  ///< C2, summed over process() calls
   double association_ms = 0.0;   ///< C4 + C5, summed
   double accumulation_ms = 0.0;  ///< accumulate() calls, summed (back-projection + extend)
+  double best_views_ms = 0.0;    ///< BestViews::update (view scoring + JPEG encoding), summed
   size_t frames = 0;
   size_t accumulated_frames = 0;
   size_t optimisations = 0;
@@ -88,9 +89,15 @@ class ObjectMapper {
   /// step count; objects seen again associate with them (C4). Call before the first frame.
   void restore_state(std::string_view bytes, const std::filesystem::path& path);
   /// Map merging (issue 19): the saved object map `bytes` of another recording, moved by
-  /// T_this_other, joins this one (ObjectMap::merge_map).
+  /// T_this_other, joins this one (ObjectMap::merge_map); with its best views (`views_bytes`,
+  /// its kObjectViewsSection; null when its map has none), which follow its objects' new ids.
   ObjectMapMergeCounts merge_state(std::string_view bytes, const std::filesystem::path& path,
-                                   const Eigen::Isometry3f& T_this_other);
+                                   const Eigen::Isometry3f& T_this_other, const std::string* views_bytes = nullptr);
+  /// Each object's best view as the kObjectViewsSection payload (objects/best_views.hpp).
+  std::string encode_views() const { return best_views_.encode(map_.instances()); }
+  /// The saved best views of the restored objects; call after restore_state (their ids).
+  void restore_views(std::string_view bytes, const std::filesystem::path& path);
+  const BestViews& best_views() const { return best_views_; }
 
  private:
   ObjectsConfig config_;

@@ -1,7 +1,7 @@
 #pragma once
 // The sections of a Mapper's map.semap (issue 19) that belong to no single stage: the camera and
 // the configuration. The stages encode their own (tsdf/map_io, tracking/tracker_state,
-// objects/object_map_io); core/archive holds the container.
+// objects/object_map_io, objects/best_views); core/archive holds the container.
 #include <filesystem>
 #include <string>
 #include <string_view>

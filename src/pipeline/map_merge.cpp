@@ -66,9 +66,14 @@ ArchiveSections fuse(const SavedMap& a, const SavedMap& b, const MapAlignment& a
 
   ObjectMapper objects(a.config.objects, a.camera);
   objects.restore_state(archive_section(a.sections, kObjectsSection, a.path), a.path);
+  // Best views (issue 43; absent from older maps): B's follow its objects' new ids.
+  if (const auto views = a.sections.find(kObjectViewsSection); views != a.sections.end())
+    objects.restore_views(views->second, a.path);
+  const auto b_views = b.sections.find(kObjectViewsSection);
   r.objects_a = objects.instances().size();
-  const ObjectMapMergeCounts counts = objects.merge_state(archive_section(b.sections, kObjectsSection, b.path), b.path,
-                                                          alignment.T_this_other.cast<float>());
+  const ObjectMapMergeCounts counts =
+      objects.merge_state(archive_section(b.sections, kObjectsSection, b.path), b.path,
+                          alignment.T_this_other.cast<float>(), b_views == b.sections.end() ? nullptr : &b_views->second);
   r.objects_b = counts.merged + counts.added;
   r.objects_merged = counts.merged;
   r.objects = objects.instances().size();
@@ -76,6 +81,7 @@ ArchiveSections fuse(const SavedMap& a, const SavedMap& b, const MapAlignment& a
   ArchiveSections out = a.sections;  // camera and configuration are A's
   out[kTsdfSection] = encode_tsdf_section(tsdf);
   out[kObjectsSection] = objects.encode_state();
+  out[kObjectViewsSection] = objects.encode_views();
   out[kTrackingSection] = encode_tracker_state(append_tracker_state(a.tracking, b.tracking, alignment.T_this_other, alignment.links));
   return out;
 }

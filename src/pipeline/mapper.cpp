@@ -688,6 +688,7 @@ ArchiveSections Mapper::Impl::sections() const {
   {
     std::lock_guard lock(objects_mutex);
     out[kObjectsSection] = objects.encode_state();
+    out[kObjectViewsSection] = objects.encode_views();  // the report's thumbnails (issue 43)
   }
   {
     std::lock_guard lock(tracker_mutex);
@@ -703,6 +704,8 @@ void Mapper::Impl::restore(const ArchiveSections& saved, const std::filesystem::
   saved_path = path;
   tsdf = SemanticTsdf(decode_tsdf_section(saved_tsdf, path, config.tsdf));
   objects.restore_state(archive_section(saved, kObjectsSection, path), path);
+  if (const auto views = saved.find(kObjectViewsSection); views != saved.end())  // none before issue 43
+    objects.restore_views(views->second, path);
   objects_in_map = objects.instances().size();
   external_poses = saved.count(kTrackingSection) == 0;  // no keyframes: only given poses can continue it
   if (*external_poses) return;

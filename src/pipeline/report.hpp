@@ -38,7 +38,7 @@ nlohmann::json timings_json(const std::map<std::string, TimingSummary>& timings)
 /// Where an object card's thumbnail comes from.
 enum class ThumbnailSource {
   camera_crop,  ///< the colour image of the keyframe that saw the object best (ObjectSummary::best_view_jpeg)
-  voxels,       ///< no such view (e.g. a resumed map's object not seen again): its coloured voxels drawn
+  voxels,       ///< no such view (e.g. a map saved by an older semap): its coloured voxels drawn
 };
 
 /// One object as report.html shows it: a card with a thumbnail.

@@ -120,7 +120,7 @@ std::string object_cards_section(const std::vector<ObjectCard>& cards) {
   h += "<p class=\"explain\">Each object of the final map: class, detector confidence (mean score of the "
        "detections merged into it, 0-100 %), size of its box in metres (longest side first), and a crop of the "
        "keyframe that saw it best (largest unoccluded view of it); an object no kept keyframe showed (e.g. from a "
-       "resumed map) is drawn from its coloured voxels instead.</p>\n<div class=\"cards\">\n";
+       "map saved by an older semap) is drawn from its coloured voxels instead.</p>\n<div class=\"cards\">\n";
   for (const ObjectCard& c : cards) h += object_card(c);
   return h + "</div>\n";
 }
@@ -132,15 +132,23 @@ struct Figure {
   std::string name, value, explanation;
 };
 
+/// Why the evaluation left RPE out (report.json evaluation.rpe.reason, e.g. a recording shorter
+/// than its 1 s step), as a clause of the figure's explanation; empty when computed or no ground truth.
+std::string rpe_missing_reason(const nlohmann::json& r) {
+  const nlohmann::json::json_pointer at("/evaluation/rpe/reason");
+  return r.contains(at) && r.at(at).is_string() ? "; not computed here: " + r.at(at).get<std::string>() : "";
+}
+
 std::vector<Figure> quality_figures(const nlohmann::json& r) {
   const std::string no_gt = "no ground truth";
+  const std::string rpe_reason = rpe_missing_reason(r);
   return {
       {"Trajectory error (ATE RMSE)", value_or(r, "evaluation/ate/rmse_m", 100, 1, "cm", no_gt),
        "root mean square distance between estimated and ground-truth camera positions after alignment"},
       {"Trajectory error, worst pose", value_or(r, "evaluation/ate/max_m", 100, 1, "cm", no_gt),
        "the largest of those distances"},
-      {"Drift (RPE)", value_or(r, "evaluation/rpe/trans_rmse_m_per_s", 100, 1, "cm/s", no_gt),
-       "how fast the position error grows, per second of motion"},
+      {"Drift (RPE)", value_or(r, "evaluation/rpe/trans_rmse_m_per_s", 100, 1, "cm/s", rpe_reason.empty() ? no_gt : "not computed"),
+       "how fast the position error grows, per second of motion" + rpe_reason},
       {"Labelled surface", value_or(r, "consistency/labelled_area_share", 100, 1, "%", "no labels"),
        "share of the mesh area that carries a class label"},
       {"Mesh area", value_or(r, "consistency/mesh_area_m2", 1, 1, "m²", "empty mesh"), "area of the mapped surface"},

@@ -17,14 +17,30 @@ Reference frame_budget() {
   return {budget_ms, "budget at " + fixed(kTargetFps, 0) + " fps: " + fixed(budget_ms, 1) + " ms"};
 }
 
+/// "1 frame lost", "3 frames lost": the count at `path` (0 when absent) with its noun.
+std::string counted(const nlohmann::json& r, const std::string& path, const std::string& one, const std::string& many) {
+  const double n = number_at(r, path).value_or(0);
+  return fixed(n, 0) + " " + (n == 1 ? one : many);
+}
+
 std::string tracking_sentence(const nlohmann::json& r) {
   if (!r.contains("tracking")) {
     const std::string poses = r.value("summary", nlohmann::json::object()).value("poses", std::string("given"));
     return "Poses were given (" + html_escape(poses == "given" ? "by the caller" : poses) + "), not tracked. ";
   }
-  return fixed(number_at(r, "tracking/lost_frames").value_or(0), 0) + " frames lost, " +
-         fixed(number_at(r, "tracking/relocalisations").value_or(0), 0) + " relocalisations, " +
-         fixed(number_at(r, "tracking/loop_edges").value_or(0), 0) + " loop closures. ";
+  return counted(r, "tracking/lost_frames", "frame lost", "frames lost") + ", " +
+         counted(r, "tracking/relocalisations", "relocalisation", "relocalisations") + ", " +
+         counted(r, "tracking/loop_edges", "loop closure", "loop closures") + ". ";
+}
+
+/// A --resume run (report.json "resumed", issue 19): whether it continued the saved map.
+std::string resumed_sentence(const nlohmann::json& r) {
+  if (!r.contains("resumed")) return "";
+  const nlohmann::json& resumed = r["resumed"];
+  if (resumed.contains("merged") && resumed["merged"] == false)
+    return "No frame relocalised into the saved map given with --resume: this recording was mapped on its own. ";
+  return "Continued a saved map of " + counted(r, "resumed/saved_keyframes", "keyframe", "keyframes") + " (" +
+         counted(r, "resumed/held_frames", "frame", "frames") + " held until the first relocalisation). ";
 }
 
 }  // namespace
@@ -35,7 +51,7 @@ std::string summary_sentences(const nlohmann::json& r) {
   if (const auto wall = number_at(r, "summary/wall_s"))
     h << " in " << fixed(*wall, 1) << " s (" << value_or(r, "summary/fps_end_to_end", 1, 1, "fps", "?")
       << " end to end, " << value_or(r, "summary/fps_online", 1, 1, "fps", "?") << " while streaming)";
-  h << ". " << tracking_sentence(r);
+  h << ". " << tracking_sentence(r) << resumed_sentence(r);
   h << fixed(number_at(r, "summary/objects").value_or(0), 0) << " objects";
   if (const auto share = number_at(r, "consistency/labelled_area_share"))
     h << ", " << fixed(*share * 100, 0) << " % of the surface labelled";

@@ -88,9 +88,11 @@ std::string svg_bar_chart(const std::vector<Bar>& bars, const std::string& unit,
   s << svg_open(label_px + plot_px + value_px, height);
   s << "<text x=\"" << label_px << "\" y=\"14\" fill=\"#555\">0</text><text x=\"" << label_px + plot_px
     << "\" y=\"14\" text-anchor=\"end\" fill=\"#555\">" << html_escape(tick(max_v, max_v) + " " + unit) << "</text>\n";
+  const auto row_y = [&](size_t i) { return top_px + row_px * static_cast<int>(i); };
+  const auto value_x = [&](const Bar& b) { return std::max(x_of(b.value), b.whisker ? x_of(*b.whisker) : 0.0) + 6; };
   for (size_t i = 0; i < bars.size(); ++i) {
     const Bar& b = bars[i];
-    const int y = top_px + row_px * static_cast<int>(i);
+    const int y = row_y(i);
     s << "<text x=\"" << label_px - 6 << "\" y=\"" << y + 14 << "\" text-anchor=\"end\">" << html_escape(b.label)
       << "</text>";
     s << "<rect class=\"datum\" x=\"" << label_px << "\" y=\"" << y + 3 << "\" width=\""
@@ -98,9 +100,7 @@ std::string svg_bar_chart(const std::vector<Bar>& bars, const std::string& unit,
       << "\"><title>" << html_escape(b.label + ": " + b.value_text) << "</title></rect>";
     if (b.whisker)
       s << "<line x1=\"" << fixed(x_of(*b.whisker), 1) << "\" x2=\"" << fixed(x_of(*b.whisker), 1) << "\" y1=\"" << y + 2
-        << "\" y2=\"" << y + row_px - 2 << "\" stroke=\"#222\" stroke-width=\"2\"/>";
-    const double text_x = std::max(x_of(b.value), b.whisker ? x_of(*b.whisker) : 0.0) + 6;
-    s << "<text x=\"" << fixed(text_x, 1) << "\" y=\"" << y + 14 << "\">" << html_escape(b.value_text) << "</text>\n";
+        << "\" y2=\"" << y + row_px - 2 << "\" stroke=\"#222\" stroke-width=\"2\"/>\n";
   }
   if (reference) {
     const double x = x_of(reference->value);
@@ -108,6 +108,11 @@ std::string svg_bar_chart(const std::vector<Bar>& bars, const std::string& unit,
       << "\" stroke=\"#c0392b\" stroke-dasharray=\"5,3\"/><text x=\"" << fixed(x, 1) << "\" y=\"" << height - 3
       << "\" fill=\"#c0392b\">" << html_escape("- - " + reference->caption) << "</text>\n";
   }
+  // The values last, with a white halo: readable where the reference line crosses them.
+  for (size_t i = 0; i < bars.size(); ++i)
+    s << "<text x=\"" << fixed(value_x(bars[i]), 1) << "\" y=\"" << row_y(i) + 14
+      << "\" stroke=\"#fff\" stroke-width=\"4\" paint-order=\"stroke\">" << html_escape(bars[i].value_text)
+      << "</text>\n";
   s << "</svg>\n";
   return s.str();
 }

@@ -351,5 +351,22 @@ TEST(PipelineRefresh, LocalEdgesAloneRefreshTheMap) {
   EXPECT_TRUE(result.mapper.map_refreshed);
 }
 
+// Issue 43: a figure left out says why. A recording shorter than RPE's 1 s step has ATE but no
+// RPE: the report says so instead of "no ground truth"; counts of one read in the singular; a
+// --resume run says what it continued.
+TEST(ReportSentences, MissingRpeSaysWhyAndResumedRunSaysWhatItContinued) {
+  const nlohmann::json r = {
+      {"summary", {{"frames", 20}, {"objects", 1}}},
+      {"tracking", {{"lost_frames", 0}, {"relocalisations", 1}, {"loop_edges", 2}}},
+      {"resumed", {{"saved_keyframes", 45}, {"held_frames", 1}}},
+      {"evaluation", {{"ate", {{"rmse_m", 0.001}, {"max_m", 0.002}}}, {"rpe", {{"pairs", 0}, {"reason", "they span 0.6 s"}}}}}};
+  const std::string summary = report::summary_sentences(r), quality = report::quality_section(r);
+  EXPECT_NE(summary.find("0 frames lost, 1 relocalisation, 2 loop closures."), std::string::npos) << summary;
+  EXPECT_NE(summary.find("Continued a saved map of 45 keyframes (1 frame held"), std::string::npos) << summary;
+  EXPECT_NE(quality.find(">not computed<"), std::string::npos) << quality;
+  EXPECT_NE(quality.find("not computed here: they span 0.6 s"), std::string::npos) << quality;
+  EXPECT_EQ(quality.find("no ground truth"), std::string::npos) << "ATE and RPE have ground truth here";
+}
+
 }  // namespace
 }  // namespace semap

@@ -1,9 +1,11 @@
 """mapper.objects() with the caller's own segmentation (labels=, instances=) and poses
 (pose=): YCB-Video 0000, 10 frames, ground-truth label images and camera poses."""
+import io
 import json
 
 import numpy as np
 import pytest
+from PIL import Image
 
 import semap
 from conftest import require_data
@@ -79,3 +81,34 @@ def test_mesh_carries_the_labels_and_object_ids(ycb_mapped):
     assert {"box", "cup"} <= labelled
     ids = set(np.unique(mesh.instances)) - {0}
     assert ids == {o.id for o in ycb_mapped.objects()}
+
+
+def decoded_view(o):
+    """The object's best view (Object.view_jpeg) decoded with Pillow, as an RGB numpy array."""
+    image = Image.open(io.BytesIO(o.view_jpeg))
+    assert image.format == "JPEG"
+    return np.asarray(image.convert("RGB"))
+
+
+def test_object_view_is_a_small_jpeg_of_the_object(ycb_mapped):
+    """Issue 43: each object's best camera view as JPEG bytes; its centre shows the object's own
+    colours (nearer to its voxels' mean colour than to any other object's)."""
+    objects = ycb_mapped.objects()
+    mean_colour = {o.id: o.colors.reshape(-1, 3).astype(float).mean(axis=0) for o in objects}
+    for o in objects:
+        assert isinstance(o.view_jpeg, bytes) and len(o.view_jpeg) > 0, o
+        view = decoded_view(o)
+        assert max(view.shape[:2]) <= 96 and min(view.shape[:2]) >= 8, view.shape
+        h, w = view.shape[:2]
+        centre = view[h // 3: 2 * h // 3, w // 3: 2 * w // 3].reshape(-1, 3).astype(float).mean(axis=0)
+        distances = {i: np.linalg.norm(centre - c) for i, c in mean_colour.items()}
+        assert min(distances, key=distances.get) == o.id, (o, distances)
+
+
+def test_object_views_survive_save_and_load(ycb_mapped, tmp_path):
+    """The views are kept in map.semap: a loaded map's objects carry the same bytes."""
+    ycb_mapped.save(tmp_path / "out")
+    loaded = semap.Mapper.load(tmp_path / "out" / "map.semap")
+    before = {o.id: o.view_jpeg for o in ycb_mapped.objects()}
+    after = {o.id: o.view_jpeg for o in loaded.objects()}
+    assert after == before and all(before.values())

@@ -34,8 +34,9 @@ struct ObjectSummary {
   size_t first_frame = 0, last_frame = 0;
   std::string state;     ///< new | stable
   /// JPEG crop (longest side <= 96 px) of the keyframe that saw the object best: its largest
-  /// unoccluded view (objects/best_views.hpp); empty when none (e.g. a resumed map's object not
-  /// seen again). Shown by report.html, not written to objects.json.
+  /// unoccluded view (objects/best_views.hpp), kept in map.semap through resume and merge; empty
+  /// when none (e.g. from a map written before views were saved). Shown by report.html, not
+  /// written to objects.json.
   std::string best_view_jpeg;
 };
 nlohmann::json to_json(const ObjectSummary& object);
