@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <unordered_set>
 
 #include "semap/core/error.hpp"
 #include "tsdf/tsdf_interpolation.hpp"
@@ -137,8 +138,33 @@ std::vector<uint8_t> carve_blocks(const TsdfMap& map, const IndexBox& blocks, co
     lines += n_lines, blocked += n_blocked;
   });
   stats.lines_of_sight = lines, stats.blocked_lines = blocked;
-  for (uint8_t f : carved) stats.carved_blocks += f;
   return carved;
+}
+
+/// Consecutive camera positions farther apart than this are a jump (relocalisation, a gap in
+/// the frames), not a path the camera moved along.
+constexpr double kMaxPathStepM = 0.5;
+
+/// The camera's path is free space too: the unallocated blocks along the segments between
+/// consecutive camera positions (every one, not only the thinned ones; after a jump only the
+/// position itself).
+void carve_path(const TsdfMap& map, const IndexBox& blocks, std::span<const Eigen::Vector3d> positions,
+                std::vector<uint8_t>& carved) {
+  const float block_m = map.block_size();
+  auto carve = [&](const Eigen::Vector3i& blk) {
+    if (!map.find_block(blk) && blocks.contains(blk)) carved[blocks.linear(blk)] = 1;
+  };
+  const Eigen::Vector3d* previous = nullptr;
+  for (const Eigen::Vector3d& p : positions) {
+    if (!p.allFinite()) continue;
+    const bool step = previous && (*previous - p).norm() <= kMaxPathStepM;
+    const Eigen::Vector3f a = (step ? *previous : p).cast<float>() / block_m, b = p.cast<float>() / block_m;
+    traverse(a, a == b ? Eigen::Vector3f(b + Eigen::Vector3f::Constant(1e-4f)) : b, [&](const Eigen::Vector3i& blk, float, float) {
+      carve(blk);
+      return true;
+    });
+    previous = &p;
+  }
 }
 
 /// Felzenszwalb-Huttenlocher 1D transform of one line with nearest-site tracking: in
@@ -204,24 +230,48 @@ size_t linear_index(const Eigen::Vector3i& c, const Eigen::Vector3i& dims) {
 }
 
 /// The grid's view of the map: each cell's sdf from the TSDF voxel at its centre, or the
-/// truncation for looked-through cells of unallocated blocks.
+/// truncation for looked-through cells of unallocated blocks and for unobserved cells on the
+/// camera's path.
 struct CellReader {
   const TsdfMap& map;
   const IndexBox& blocks;
   const std::vector<uint8_t>& carved;
+  const std::unordered_set<size_t>& path_cells;
   const Esdf& grid;
   float truncation;
-  /// False when the cell is unknown; `looked_through`: the value is the carved stand-in.
-  bool sdf(CachedVoxelLookup& lookup, const Eigen::Vector3i& cell, float& sdf_m, bool* looked_through = nullptr) const {
+  /// False when the cell is unknown.
+  bool sdf(CachedVoxelLookup& lookup, const Eigen::Vector3i& cell, float& sdf_m) const {
     const VoxelIndex v = map.voxel_of_point(grid.cell_centre_W(cell).cast<float>());
-    if (looked_through) *looked_through = false;
     if (const TsdfVoxel* voxel = lookup.observed(v)) return sdf_m = voxel->sdf(), true;
     const BlockIndex b = block_of_voxel(v);
-    if (map.find_block(b) || !blocks.contains(b) || !carved[blocks.linear(b)]) return false;
-    if (looked_through) *looked_through = true;
+    const bool looked_through = !map.find_block(b) && blocks.contains(b) && carved[blocks.linear(b)];
+    if (!looked_through && !path_cells.contains(linear_index(cell, grid.dims()))) return false;
     return sdf_m = truncation, true;
   }
 };
+
+/// Cells on the camera's path (consecutive positions at most kMaxPathStepM apart) and the 8
+/// around each position (a query there interpolates them).
+std::unordered_set<size_t> path_cells(const Esdf& grid, const Eigen::Vector3i& origin_cell, double cell_m,
+                                      std::span<const Eigen::Vector3d> positions) {
+  std::unordered_set<size_t> cells;
+  const Eigen::Vector3i dims = grid.dims();
+  auto add = [&](const Eigen::Vector3i& c) {
+    if ((c.array() >= 0).all() && (c.array() < dims.array()).all()) cells.insert(linear_index(c, dims));
+  };
+  auto in_cells = [&](const Eigen::Vector3d& p) { return Eigen::Vector3f((p / cell_m - origin_cell.cast<double>()).cast<float>()); };
+  const Eigen::Vector3d* previous = nullptr;
+  for (const Eigen::Vector3d& p : positions) {
+    if (!p.allFinite()) continue;
+    if (previous && (*previous - p).norm() <= kMaxPathStepM && *previous != p)
+      traverse(in_cells(*previous), in_cells(p), [&](const Eigen::Vector3i& c, float, float) { return add(c), true; });
+    const Eigen::Vector3f u = in_cells(p) - Eigen::Vector3f::Constant(0.5f);
+    const Eigen::Vector3i c0 = u.array().floor().cast<int>();
+    for (int corner = 0; corner < 8; ++corner) add(c0 + Eigen::Vector3i(corner & 1, (corner >> 1) & 1, corner >> 2));
+    previous = &p;
+  }
+  return cells;
+}
 
 /// body(cell) over every cell, parallel over z; each range runs its own copy of body.
 template <class Body>
@@ -380,7 +430,11 @@ Esdf build_esdf(const TsdfMap& map, std::span<const Eigen::Vector3d> camera_posi
   IndexBox blocks;
   for (const auto& b : map.blocks()) blocks.add(b->index);
   const std::vector<Eigen::Vector3f> cameras = thin_cameras(camera_positions_W);
-  for (const Eigen::Vector3f& c : cameras) blocks.add(block_of_voxel(map.voxel_of_point(c)));
+  for (const Eigen::Vector3d& c : camera_positions_W)  // with the cells a query there interpolates
+    for (int corner = 0; c.allFinite() && corner < 8; ++corner) {
+      const Eigen::Vector3d o((corner & 1) ? 1 : -1, (corner & 2) ? 1 : -1, (corner & 4) ? 1 : -1);
+      blocks.add(block_of_voxel(map.voxel_of_point((c + o * map.block_size()).cast<float>())));
+    }
   st.cameras_used = cameras.size();
   if (blocks.empty()) return e;
   place_grid(map, blocks, config, e.origin_cell_, e.dims_, e.cell_m_);
@@ -389,9 +443,12 @@ Esdf build_esdf(const TsdfMap& map, std::span<const Eigen::Vector3d> camera_posi
   const size_t n = static_cast<size_t>(dims.cast<int64_t>().prod());
   st.peak_bytes = n * kEsdfBuildBytesPerCell;
 
-  const std::vector<uint8_t> carved =
+  std::vector<uint8_t> carved =
       cameras.empty() ? std::vector<uint8_t>(blocks.size(), 0) : carve_blocks(map, blocks, cameras, surface_targets(map), st);
-  const CellReader reader{map, blocks, carved, e, static_cast<float>(map.config().truncation())};
+  carve_path(map, blocks, camera_positions_W, carved);
+  for (uint8_t f : carved) st.carved_blocks += f;
+  const std::unordered_set<size_t> path = path_cells(e, e.origin_cell_, e.cell_m_, camera_positions_W);
+  const CellReader reader{map, blocks, carved, path, e, static_cast<float>(map.config().truncation())};
   const std::vector<Cell> state = cell_states(reader, dims, st);
   std::vector<float> g(n, kInf);
   std::vector<int32_t> site(n, -1);

@@ -15,7 +15,9 @@
 // camera position (the trajectory, thinned to kCarveCameraSpacingM) to a surface voxel of
 // another block (one per block, within tsdf.max_depth) crosses it and crosses no observed
 // surface on the way (sdf <= 0 in an allocated block): a line of sight, as voxblox carves free
-// space along every ray. Without camera positions only the TSDF's own voxels are observed.
+// space along every ray. So do the blocks on the camera's path (between consecutive positions
+// at most 0.5 m apart; a longer step is a jump).
+// Without camera positions only the TSDF's own voxels are observed.
 //
 // Surface: the zero crossings of the sdf between 6-neighbour cells of opposite known state
 // (linear interpolation); each cell next to one carries their mean point. A crossing whose sdf
@@ -48,7 +50,7 @@ struct EsdfStats {
   Eigen::Vector3i dims = Eigen::Vector3i::Zero();  ///< cells per axis
   double cell_m = 0.0;             ///< cell edge
   size_t free_cells = 0, occupied_cells = 0, unknown_cells = 0;
-  size_t carved_blocks = 0;        ///< unallocated TSDF blocks seen free along lines of sight
+  size_t carved_blocks = 0;        ///< unallocated TSDF blocks seen free along lines of sight or the path
   size_t surface_cells = 0;        ///< cells next to a zero crossing (the transform's sites)
   size_t shadow_cells = 0;         ///< occupied cells turned free: only implausible crossings (esdf.cpp)
   size_t cameras_used = 0;         ///< camera positions after thinning
