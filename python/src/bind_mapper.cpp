@@ -4,6 +4,7 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include <atomic>
 #include <chrono>
 #include <filesystem>
 #include <mutex>
@@ -71,6 +72,7 @@ class PyMapper {
       const Frame frame = to_frame(arrays, mapper_->camera(), next_index_, hints);
       out.result = mapper_->add_frame(frame, std::move(hints));
       ++next_index_;
+      ++map_generation_;
     }
     out.binding_ms = ms_since(t0) - out.result.total_ms;
     return out;
@@ -80,6 +82,7 @@ class PyMapper {
     py::gil_scoped_release nogil;
     std::lock_guard lock(driver_mutex_);
     mapper_->finish();
+    ++map_generation_;
   }
 
   void save(const std::filesystem::path& dir) {
@@ -97,17 +100,28 @@ class PyMapper {
     }
     return json_to_python(graph);
   }
+  /// The distance field of the map now (navigation/distance_query.hpp), built on the first query
+  /// after the map changed (add_frame, finish) from the TSDF and the camera positions.
+  std::shared_ptr<const DistanceQuery> distance_query() const {
+    std::lock_guard lock(query_mutex_);
+    const size_t generation = map_generation_;
+    if (!query_ || query_generation_ != generation) {
+      std::vector<Eigen::Vector3d> cameras;
+      for (const StampedPose& p : mapper_->trajectory()) cameras.push_back(p.T_world_camera.translation());
+      mapper_->read_tsdf([&](const TsdfMap& map) {
+        query_ = std::make_shared<const DistanceQuery>(map, mapper_->config().navigation, cameras);
+      });
+      query_generation_ = generation;
+    }
+    return query_;
+  }
   double distance_m(const std::array<double, 3>& p) const {
     py::gil_scoped_release nogil;
-    double d = 0;
-    mapper_->read_tsdf([&](const TsdfMap& map) { d = DistanceQuery(map).distance_m({p[0], p[1], p[2]}); });
-    return d;
+    return distance_query()->distance_m({p[0], p[1], p[2]});
   }
   bool is_free(const std::array<double, 3>& p, double radius_m) const {
     py::gil_scoped_release nogil;
-    bool free = false;
-    mapper_->read_tsdf([&](const TsdfMap& map) { free = DistanceQuery(map).is_free({p[0], p[1], p[2]}, radius_m); });
-    return free;
+    return distance_query()->is_free({p[0], p[1], p[2]}, radius_m);
   }
 
   py::list trajectory() const {
@@ -182,6 +196,10 @@ class PyMapper {
   std::unique_ptr<Mapper> mapper_;
   std::mutex driver_mutex_;
   size_t next_index_ = 0;
+  std::atomic<size_t> map_generation_{0};  ///< bumped by every call that changes the map
+  mutable std::mutex query_mutex_;
+  mutable std::shared_ptr<const DistanceQuery> query_;
+  mutable size_t query_generation_ = 0;
 };
 
 }  // namespace
@@ -214,9 +232,12 @@ void bind_mapper(py::module_& m) {
       .def("config_yaml", &PyMapper::config_yaml, "the configuration in use, as YAML")
       .def("scene_graph", &PyMapper::scene_graph, "the scene graph now, as scene_graph.json's dict (issue 39)")
       .def("distance_m", &PyMapper::distance_m, py::arg("point"),
-           "interpolated TSDF distance (m, world frame) at point, clamped at the truncation; nan where unobserved")
+           "signed Euclidean distance (m, world frame) from point to the nearest observed surface (3D distance field, "
+           "built once per map state): positive in observed free space, nan where unobserved, at most "
+           "navigation.esdf_max_distance_m")
       .def("is_free", &PyMapper::is_free, py::arg("point"), py::arg("radius"),
-           "whether the ball (world frame, m) is observed and in front of every surface (unobserved: not free)");
+           "whether point is observed and distance_m(point) >= radius (no observed surface in the ball; unobserved: "
+           "not free)");
 }
 
 }  // namespace semap::python

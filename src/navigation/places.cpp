@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <deque>
+#include <map>
+#include <set>
 #include <opencv2/imgproc.hpp>
 
 namespace semap {
@@ -64,10 +66,15 @@ struct Seed {
   std::vector<int> cells;
   double clearance_m = 0.0;
 };
-std::vector<Seed> room_seeds(const cv::Mat& room, const cv::Mat& open, double resolution_m, double passage_m) {
-  cv::Mat clearance;  // cells to the nearest closed cell (a wall, an obstacle that is no object)
+/// Metres from each open cell's centre to the nearest closed cell's (a wall, an obstacle that
+/// is no object).
+cv::Mat clearance_map_m(const cv::Mat& open, double resolution_m) {
+  cv::Mat clearance;
   cv::distanceTransform(open, clearance, cv::DIST_L2, cv::DIST_MASK_PRECISE, CV_32F);
-  clearance *= resolution_m;
+  return clearance * resolution_m;
+}
+
+std::vector<Seed> room_seeds(const cv::Mat& room, const cv::Mat& clearance, double passage_m) {
   const cv::Mat core = clearance > 0.5 * passage_m;
   cv::Mat labels;
   const int n = components(core, labels);
@@ -83,6 +90,39 @@ std::vector<Seed> room_seeds(const cv::Mat& room, const cv::Mat& open, double re
   return seeds;
 }
 
+/// Passages between places whose cells touch (see places.hpp).
+std::vector<PlacePassage> find_passages(const OccupancyGrid& grid, const std::vector<int>& place_of_cell,
+                                        const cv::Mat& clearance) {
+  struct Border {
+    std::set<int> cells;
+    float best_clearance_m = -1.f;
+    Eigen::Vector2d centre_G = Eigen::Vector2d::Zero();
+  };
+  std::map<std::pair<int, int>, Border> borders;
+  for (int y = 0; y < grid.height; ++y)
+    for (int x = 0; x < grid.width; ++x) {
+      const int i = static_cast<int>(grid.index(x, y)), p = place_of_cell[i];
+      if (p < 0) continue;
+      for (int dy = 0; dy <= 1; ++dy)  // each neighbour pair once: right, below-left, below, below-right
+        for (int dx = -1; dx <= 1; ++dx) {
+          if (dy == 0 && dx <= 0) continue;
+          const int nx = x + dx, ny = y + dy;
+          if (nx < 0 || ny >= grid.height || nx >= grid.width) continue;
+          const int j = static_cast<int>(grid.index(nx, ny)), q = place_of_cell[j];
+          if (q < 0 || q == p) continue;
+          Border& b = borders[{std::min(p, q), std::max(p, q)}];
+          b.cells.insert(i), b.cells.insert(j);
+          const float c = std::min(clearance.at<float>(y, x), clearance.at<float>(ny, nx));
+          if (c > b.best_clearance_m)
+            b.best_clearance_m = c, b.centre_G = 0.5 * (grid.cell_centre(x, y) + grid.cell_centre(nx, ny));
+        }
+    }
+  std::vector<PlacePassage> passages;
+  for (const auto& [pair, b] : borders)
+    passages.push_back({pair.first, pair.second, 2.0 * b.best_clearance_m, b.centre_G, b.cells.size()});
+  return passages;
+}
+
 }  // namespace
 
 PlaceMap segment_places(const OccupancyGrid& grid, const NavigationConfig& config) {
@@ -90,9 +130,9 @@ PlaceMap segment_places(const OccupancyGrid& grid, const NavigationConfig& confi
   if (grid.width == 0 || grid.height == 0) return out;
   const size_t n = grid.state.size();
   const cv::Mat room = room_space(grid);
+  const cv::Mat clearance = clearance_map_m(open_space(grid, room), grid.resolution_m);
   std::vector<Seed> seeds;
-  if (config.place_passage_width_m > 0)
-    seeds = room_seeds(room, open_space(grid, room), grid.resolution_m, config.place_passage_width_m);
+  if (config.place_passage_width_m > 0) seeds = room_seeds(room, clearance, config.place_passage_width_m);
   const double cell_m2 = grid.resolution_m * grid.resolution_m;
   for (int growth = 0; growth < kMaxGrowths; ++growth) {
     // Seeds first, then one region per connected room space that no seed reaches.
@@ -147,6 +187,7 @@ PlaceMap segment_places(const OccupancyGrid& grid, const NavigationConfig& confi
         if (p >= 0 && grid.state[i] == CellState::kFree) sum[p] += grid.cell_centre(ix, iy);
       }
     for (size_t p = 0; p < out.places.size(); ++p) out.places[p].centroid_G = sum[p] / static_cast<double>(out.places[p].cells);
+    out.passages = find_passages(grid, out.place_of_cell, clearance);
     break;
   }
   return out;

@@ -88,12 +88,17 @@ void add_in_and_near_edges(SceneGraph& g) {
   g.edges.insert(g.edges.end(), edges.begin(), edges.end());
 }
 
-/// Places (navigation/places.hpp) and each object's in_place edge: the place of the room-space
-/// cell nearest its box centre.
+/// Places (navigation/places.hpp), a connected edge per passage between two, and each object's
+/// in_place edge: the place of the room-space cell nearest its box centre.
 void add_places(SceneGraph& g, const OccupancyGrid& grid) {
   PlaceMap places = segment_places(grid, g.config);
   g.places = std::move(places.places);
   if (g.places.empty()) return;
+  for (const PlacePassage& p : places.passages)
+    g.edges.push_back({Relation::kConnected, g.places[p.a].id, g.places[p.b].id,
+                       {{"passage_width_m", p.width_m},
+                        {"passage_centre_G", {p.centre_G.x(), p.centre_G.y(), 0.0}},
+                        {"border_cells", p.border_cells}}});
   for (const SceneObjectNode& o : g.objects) {
     double best_d2 = std::numeric_limits<double>::infinity();
     int best = -1;

@@ -8,7 +8,9 @@
 //   - the walls bound the free space: no free cell lies behind a wall within its span, and the
 //     cameras are on the room side of every wall;
 //   - the cups are `on` the table, the table `on` the floor, nothing is `on` (or any relation
-//     to) a wall or the ceiling.
+//     to) a wall or the ceiling;
+//   - the 3D distance field (map.semap + the camera positions) finds every camera position in
+//     observed free space, most of them farther from any surface than the TSDF's truncation.
 // SEMAP_NAVIGATION_REAL_KEEP=DIR keeps a copy of the run's output folder there (to look at it
 // with `semap view DIR`).
 #include <gtest/gtest.h>
@@ -20,11 +22,13 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "semap/io/trajectory_io.hpp"
+#include "semap/navigation/distance_query.hpp"
 #include "semap/navigation/scene_graph.hpp"
 #include "semap/pipeline/run_pipeline.hpp"
 #include "sequence_slices.hpp"
 #include "shared_fixture.hpp"
 #include "test_support.hpp"
+#include "tsdf/map_io.hpp"
 
 namespace semap {
 namespace {
@@ -91,11 +95,12 @@ class NavigationReal : public ::testing::Test {
     map_ = new MapFile(read_map(out));
     graph_ = new SceneGraph(load_scene_graph(out));
     trajectory_ = new Trajectory(read_tum_trajectory(out / "trajectory.txt"));
+    tsdf_ = new TsdfMap(load_map(out / "map.semap"));
     if (const char* keep = std::getenv("SEMAP_NAVIGATION_REAL_KEEP"))
       std::filesystem::copy(out, keep, std::filesystem::copy_options::recursive);
   }
   static void TearDownTestSuite() {
-    delete trajectory_, delete graph_, delete map_, delete dir_;
+    delete tsdf_, delete trajectory_, delete graph_, delete map_, delete dir_;
   }
   void SetUp() override {
     if (!map_) SEMAP_SKIP_OR_FAIL("7scenes_redkitchen or the default models missing (SEMAP_DATA_DIR / SEMAP_MODELS_DIR)");
@@ -104,6 +109,7 @@ class NavigationReal : public ::testing::Test {
   static inline MapFile* map_ = nullptr;
   static inline SceneGraph* graph_ = nullptr;
   static inline Trajectory* trajectory_ = nullptr;
+  static inline TsdfMap* tsdf_ = nullptr;
 };
 
 TEST_F(NavigationReal, CellsUnderTheCameraAreNeverOccupied) {
@@ -202,6 +208,37 @@ TEST_F(NavigationReal, CupsOnTheTableTableOnTheFloorNothingOnAWall) {
     EXPECT_TRUE(below && below->class_name == "table") << id << " " << o.class_name << " is on '" << support[id] << "'";
   }
   EXPECT_GE(over_table, 1u) << "no cup or laptop over the table";
+}
+
+// Where the camera was is free space: the distance field must say so (observed, no surface
+// within a few centimetres), and measure it beyond the TSDF's truncation band where the camera
+// stood in the open (the clamped TSDF query it replaced read at most 8 cm, or NaN there).
+TEST_F(NavigationReal, CameraPositionsLieInObservedFreeSpace) {
+  std::vector<Eigen::Vector3d> cameras;
+  for (const auto& pose : *trajectory_) cameras.push_back(pose.T_world_camera.translation());
+  const DistanceQuery query(*tsdf_, NavigationConfig{}, cameras);
+  const double truncation = tsdf_->config().truncation();
+  size_t observed = 0, free_5cm = 0, beyond_truncation = 0;
+  std::vector<double> d;
+  for (const Eigen::Vector3d& c : cameras) {
+    const double di = query.distance_m(c);
+    if (std::isnan(di)) {
+      std::printf("unobserved camera position (%.3f, %.3f, %.3f)\n", c.x(), c.y(), c.z());
+      continue;
+    }
+    ++observed, d.push_back(di);
+    free_5cm += query.is_free(c, 0.05);
+    beyond_truncation += di > truncation;
+  }
+  std::sort(d.begin(), d.end());
+  const EsdfStats& st = query.esdf().stats();
+  std::printf("camera positions: %zu, observed %zu, free for a 5 cm ball %zu, beyond the truncation (%.2f m) %zu; "
+              "distance min %.3f median %.3f m; field built in %.2f s, %d x %d x %d cells\n",
+              cameras.size(), observed, free_5cm, truncation, beyond_truncation, d.empty() ? NAN : d.front(),
+              d.empty() ? NAN : d[d.size() / 2], st.build_s, st.dims.x(), st.dims.y(), st.dims.z());
+  EXPECT_EQ(observed, cameras.size());
+  EXPECT_GE(free_5cm, observed * 95 / 100);
+  EXPECT_GT(beyond_truncation, observed / 2);
 }
 
 }  // namespace

@@ -4,7 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
+#include <set>
 #include <random>
 
 #include "semap/navigation/places.hpp"
@@ -183,6 +185,19 @@ TEST(NavigationStructure, DoorSplitsTwoRoomsIntoTwoPlaces) {
   EXPECT_EQ(place_of["object_1"], room1);
   EXPECT_EQ(place_of["object_2"], room1);
   EXPECT_EQ(place_of["object_3"], room2);
+  // One connected edge between the rooms, through the door: 0.8 m wide, centred in it.
+  std::vector<const SceneEdge*> connected;
+  for (const SceneEdge& e : g.edges)
+    if (e.relation == Relation::kConnected) connected.push_back(&e);
+  ASSERT_EQ(connected.size(), 1u);
+  EXPECT_EQ(std::set<std::string>({connected[0]->source, connected[0]->target}), std::set<std::string>({room1, room2}));
+  const double width = connected[0]->evidence.at("passage_width_m").get<double>();
+  std::printf("passage %s: %.3f m wide\n", connected[0]->evidence.dump().c_str(), width);
+  EXPECT_NEAR(width, 0.8, grid.resolution_m) << width;
+  const auto centre = connected[0]->evidence.at("passage_centre_G").get<std::vector<double>>();
+  EXPECT_GE(centre[0], 2.8);  // in the door (the wall spans x 3.0-3.2, the door y 1.0-1.8)
+  EXPECT_LE(centre[0], 3.4);
+  EXPECT_NEAR(centre[1], 1.4, 0.1);
   const SceneGraph again = scene_graph_from_json(to_json(g), "test");
   EXPECT_EQ(to_json(again), to_json(g));
 }
@@ -206,12 +221,18 @@ TEST(NavigationStructure, RingOfFreeFloorAroundUnknownMiddleIsOnePlace) {
       else if (std::pow(d.x() / 2.7, 2) + std::pow(d.y() / 1.2, 2) < 1.0)
         g.state[i] = CellState::kUnknown;
     }
-  EXPECT_EQ(segment_places(g, NavigationConfig{}).places.size(), 1u);
+  const PlaceMap places = segment_places(g, NavigationConfig{});
+  EXPECT_EQ(places.places.size(), 1u);
+  EXPECT_TRUE(places.passages.empty());  // a single room has no passage
 }
 
 TEST(NavigationStructure, WideOpeningAndNoSplitGiveOnePlace) {
   NavigationConfig config;
-  EXPECT_EQ(segment_places(two_rooms(1.6), config).places.size(), 1u);  // an opening, not a door
+  const PlaceMap open = segment_places(two_rooms(1.6), config);
+  EXPECT_EQ(open.places.size(), 1u);  // an opening, not a door
+  EXPECT_TRUE(open.passages.empty());
+  const SceneGraph g = build_scene_graph({}, two_rooms(1.6), {}, config);
+  EXPECT_EQ(std::count_if(g.edges.begin(), g.edges.end(), [](const SceneEdge& e) { return e.relation == Relation::kConnected; }), 0);
   config.place_passage_width_m = 0.0;
   EXPECT_EQ(segment_places(two_rooms(0.8), config).places.size(), 1u);  // connected: one region
 }

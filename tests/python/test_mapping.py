@@ -187,10 +187,10 @@ def test_load_continues_a_saved_map(tum, tum_mapped, tmp_path):
 
 
 def test_distance_queries_and_scene_graph(tum_mapped):
-    """Issue 39: the TSDF's signed distance on the mesh (the surface), 5 cm in front of it along
-    the normal (free), 5 cm behind it (inside), and far outside the room (unobserved). The TSDF
-    holds distances within its truncation band only: free space farther from every surface is
-    unobserved for these queries (the 2D esdf.npy covers it)."""
+    """Issue 39: the 3D distance field's signed distance on the mesh (the surface), 5 cm in front
+    of it along the normal (free), 5 cm behind it (inside), 30 cm in front of it (beyond the
+    TSDF's 8 cm truncation band: the space the camera looked through), and far outside the room
+    (unobserved)."""
     mapper, _ = tum_mapped
     mesh = mapper.mesh()
     v, t = mesh.vertices.astype(float), mesh.triangles
@@ -212,10 +212,14 @@ def test_distance_queries_and_scene_graph(tum_mapped):
     assert abs(np.median(distances(step, 0.8)) - step) < 0.02
     # Behind a surface only a thin band was seen (the truncation behind it, measured: a third).
     assert np.median(distances(-step, 0.2)) < -0.02
+    # 30 cm out: farther than the truncation, and no farther than the surface it left (another
+    # surface may be nearer).
+    far_out = distances(0.3, 0.3)
+    assert np.median(far_out) > 0.1 and np.percentile(far_out, 95) < 0.32
     free = [mapper.is_free(p + step * n, 0.02) for p, n in zip(points, normals)]
     inside = [mapper.is_free(p - step * n, 0.02) for p, n in zip(points, normals)]
-    # Free: the whole 2 cm ball observed and in front of every surface; balls at the mesh's
-    # borders and in corners reach unobserved voxels (measured: 0.6 of the picks are free).
+    # Free: observed and at least 2 cm from every surface (points at the mesh's borders lie in
+    # unobserved space).
     assert np.mean(free) > 0.5 and np.mean(inside) < 0.05
     far = np.array([100.0, 100.0, 100.0])
     assert np.isnan(mapper.distance_m(far)) and not mapper.is_free(far, 0.1)

@@ -8,6 +8,7 @@ import * as THREE from 'three';
 import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
 import { CSS2DRenderer, CSS2DObject } from 'three/examples/jsm/renderers/CSS2DRenderer.js';
 import { parsePly } from './ply.js';
+import { declutterLabels, labelPriority } from './labels.js';
 import { parseMapYaml, parsePgm, buildGridLayer, buildGraphLayers, GRID_COLOURS, EDGE_COLOURS } from './navigation.js';
 
 const CLEAR_COLOUR = 0x1e2228;  // the screenshot test counts pixels differing from this
@@ -19,6 +20,8 @@ const state = {
   visibleClasses: new Set(),
   objects: [],            // entries of objects.json with their three objects
   pickTargets: [],
+  hoveredObject: null,    // the object under the pointer (its label shows above the others)
+  labelStats: { shown: 0, hidden: 0, rects: [] },  // the last declutterLabels() result
   ready: false,
   errors: [],
   messages: [],
@@ -74,12 +77,20 @@ window.addEventListener('resize', () => {
   needsRender = true;
 });
 
+// One frame: the scene, then the labels, then their decluttering (labels.js).
+function renderFrame() {
+  renderer.render(scene, camera);
+  labelRenderer.render(scene, camera);
+  state.labelStats = declutterLabels(state.objects.map((entry, order) => ({
+    element: entry.element, priority: entry.priority, order, hovered: entry.object === state.hoveredObject,
+  })));
+}
+
 function animate() {
   requestAnimationFrame(animate);
   if (!needsRender) return;
   needsRender = false;
-  renderer.render(scene, camera);
-  labelRenderer.render(scene, camera);
+  renderFrame();
 }
 
 // ------------------------------------------------------------------ helpers
@@ -338,7 +349,7 @@ function buildObjects(json) {
     const top = new THREE.Vector3(0, 0, 0).applyMatrix4(matrix);
     label.position.copy(top);
     boxGroup.add(label);
-    state.objects.push({ object, centre: top });
+    state.objects.push({ object, centre: top, element: tag, priority: labelPriority(object, obb.extent) });
   }
   if (skipped > 0) showMessage(`${skipped} object(s) without a box were skipped`, 'warn');
   return state.objects.length;
@@ -393,6 +404,22 @@ renderer.domElement.addEventListener('pointerup', (e) => {
   const hits = raycaster.intersectObjects(state.pickTargets.filter(() => boxGroup.visible), false);
   if (hits.length > 0) showObject(hits[0].object.userData.object);
   else dom.info.hidden = true;
+});
+// Hovering a box brings its label to the front, hidden or not (labels.js).
+renderer.domElement.addEventListener('pointermove', (e) => {
+  if (e.buttons !== 0 || state.pickTargets.length === 0) return;
+  const rect = renderer.domElement.getBoundingClientRect();
+  const ndc = new THREE.Vector2(((e.clientX - rect.left) / rect.width) * 2 - 1, -((e.clientY - rect.top) / rect.height) * 2 + 1);
+  raycaster.setFromCamera(ndc, camera);
+  const hits = boxGroup.visible ? raycaster.intersectObjects(state.pickTargets, false) : [];
+  // Boxes nest (a cup's inside the table's): the smallest box under the pointer is the one meant.
+  const volume = (hit) => { const m = hit.object.matrix.elements; return Math.hypot(m[0], m[1], m[2]) * Math.hypot(m[4], m[5], m[6]) * Math.hypot(m[8], m[9], m[10]); };
+  const smallest = hits.reduce((best, hit) => (best === null || volume(hit) < volume(best) ? hit : best), null);
+  const hovered = smallest ? smallest.object.userData.object : null;
+  if (hovered !== state.hoveredObject) {
+    state.hoveredObject = hovered;
+    needsRender = true;
+  }
 });
 
 // ------------------------------------------------------------------ trajectory
@@ -615,7 +642,7 @@ async function loadNavigation(files, say) {
       graphGroup.add(graph);
       nearGroup.add(near);
       state.layerCounts.graph = counts;
-      say(`scene graph: ${counts.on} on, ${counts.in} in, ${counts.near} near, ${counts.places} place(s), ${counts.walls} wall(s)`);
+      say(`scene graph: ${counts.on} on, ${counts.in} in, ${counts.near} near, ${counts.places} place(s), ${counts.connected} passage(s), ${counts.walls} wall(s)`);
     } catch (error) {
       showMessage(`scene_graph.json could not be shown: ${error.message}`, 'error');
     }
@@ -632,6 +659,7 @@ function buildNavigationLegend() {
   document.getElementById('legend-navigation').innerHTML =
     swatch(GRID_COLOURS.free, 'free') + swatch(GRID_COLOURS.occupied, 'occupied') + '<br>' +
     swatch(EDGE_COLOURS.on, 'on') + swatch(EDGE_COLOURS.in, 'in') + swatch(EDGE_COLOURS.in_place, 'in place') +
+    swatch(EDGE_COLOURS.connected, 'connected') +
     swatch(EDGE_COLOURS.near, 'near') + swatch(EDGE_COLOURS.wall, 'wall');
 }
 buildNavigationLegend();
@@ -649,6 +677,7 @@ function clearMap() {
   state.meshGeometry = null;
   state.trianglesByClass = new Map();
   state.objects = [];
+  state.hoveredObject = null;
   state.pickTargets = [];
   state.trajectoryMarkers = null;
 }
@@ -744,8 +773,7 @@ function startLive(live, files, floorId, fittedBounds) {
 
 function finish() {
   // Render synchronously once so that `ready` means "the first frame is on the canvas".
-  renderer.render(scene, camera);
-  labelRenderer.render(scene, camera);
+  renderFrame();
   state.ready = true;
   document.body.dataset.ready = 'true';
 }
@@ -794,7 +822,10 @@ window.semapViewer = {
   viewFromAbove,
   restoreView,
   layerCounts: () => ({ ...state.layerCounts }),
-  render() { renderer.render(scene, camera); labelRenderer.render(scene, camera); },
+  render: renderFrame,
+  // Object labels after the last frame's decluttering: shown, hidden, and the shown labels'
+  // page rectangles (none may overlap another).
+  labelStats: () => ({ shown: state.labelStats.shown, hidden: state.labelStats.hidden, rects: state.labelStats.rects }),
 };
 
 main().catch((error) => {

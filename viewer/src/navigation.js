@@ -4,14 +4,15 @@
 //   - the scene graph (scene_graph.json): its edges as lines between object box centres
 //     (on orange, in magenta; near grey and in_place cyan, to the place's label on the floor,
 //     in a second layer, off by default: every object has one, a fan of lines), the places as
-//     labels and the walls as outlined rectangles.
+//     labels, `connected` places (green) joined through their passage's centre with its width
+//     written there, and the walls as outlined rectangles.
 // Both live in the gravity frame G of the run (z up, z = 0 on the floor); T_W_G (in map.yaml
 // and scene_graph.json) places them in the world frame of mesh.ply.
 import * as THREE from 'three';
 import { CSS2DObject } from 'three/examples/jsm/renderers/CSS2DRenderer.js';
 
 export const GRID_COLOURS = { free: [120, 190, 255], occupied: [235, 70, 55] };
-export const EDGE_COLOURS = { on: [255, 170, 30], in: [230, 80, 230], near: [150, 150, 150], in_place: [60, 220, 220], wall: [240, 240, 240] };
+export const EDGE_COLOURS = { on: [255, 170, 30], in: [230, 80, 230], near: [150, 150, 150], in_place: [60, 220, 220], connected: [90, 230, 110], wall: [240, 240, 240] };
 const GRID_LIFT_M = 0.02;  // above the floor surface, so that the floor mesh does not hide it
 
 function matrixFromRows(rows) {
@@ -127,9 +128,21 @@ export function buildGraphLayers(json) {
   for (const p of json.places || []) positionG.set(p.id, new THREE.Vector3(p.centroid_G[0], p.centroid_G[1], GRID_LIFT_M));
   const graph = new THREE.Group();
   const near = new THREE.Group();
-  const byRelation = { on: [], in: [], near: [], in_place: [] };
-  const counts = { on: 0, in: 0, near: 0, in_place: 0, places: (json.places || []).length, walls: 0 };
+  const byRelation = { on: [], in: [], near: [], in_place: [], connected: [] };
+  const counts = { on: 0, in: 0, near: 0, in_place: 0, connected: 0, places: (json.places || []).length, walls: 0 };
   for (const e of json.edges || []) {
+    if (e.relation === 'connected') {  // place to place through the passage's centre
+      const a = positionG.get(e.source), b = positionG.get(e.target), c = e.evidence && e.evidence.passage_centre_G;
+      if (!a || !b || !Array.isArray(c) || c.length !== 3 || !c.every(Number.isFinite)) continue;
+      const door = new THREE.Vector3(c[0], c[1], GRID_LIFT_M).applyMatrix4(T);
+      byRelation.connected.push(a.clone().applyMatrix4(T), door, door, b.clone().applyMatrix4(T));
+      const width = Number(e.evidence.passage_width_m);
+      const label = tag(`${Number.isFinite(width) ? width.toFixed(2) : '?'} m`, 'place-label', EDGE_COLOURS.connected);
+      label.position.copy(door);
+      graph.add(label);
+      ++counts.connected;
+      continue;
+    }
     const a = positionG.get(e.source);
     // `on` the floor: straight down to the floor under the object's centre.
     const b = e.target === 'floor' && a ? a.clone().setZ(0) : positionG.get(e.target);
@@ -137,7 +150,7 @@ export function buildGraphLayers(json) {
     byRelation[e.relation].push(a.clone().applyMatrix4(T), b.clone().applyMatrix4(T));
     ++counts[e.relation];
   }
-  for (const relation of ['on', 'in']) {
+  for (const relation of ['on', 'in', 'connected']) {
     if (byRelation[relation].length > 0) graph.add(lines(byRelation[relation], EDGE_COLOURS[relation]));
   }
   if (byRelation.near.length > 0) near.add(lines(byRelation.near, EDGE_COLOURS.near, 0.7));

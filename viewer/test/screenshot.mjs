@@ -4,6 +4,8 @@
 //     --min-fraction (UI panels hidden for this shot),
 //   - the class toggles work: with every class switched off most of those pixels disappear,
 //   - clicking an object box opens its panel (class distribution, point count),
+//   - no two object labels shown overlap (labels.js hides the lesser of overlapping ones), also
+//     zoomed in on the first object (labels_zoomed.png),
 //   - the occupancy grid and scene graph layers (when the folder has them) each change the
 //     picture when toggled (layers_on.png, grid_off.png, graph_off.png),
 //   - the console shows no errors and no request fails.
@@ -104,7 +106,6 @@ async function layerChecks(page, args, result, problems) {
   if (result.layer_counts.grid) {
     await page.evaluate(() => { window.semapViewer.viewFromAbove(); window.semapViewer.render(); });
     await page.screenshot({ path: path.join(args.out, 'from_above.png') });
-    await page.evaluate(() => { window.semapViewer.restoreView(); window.semapViewer.render(); });
   }
 }
 
@@ -128,10 +129,22 @@ async function liveCheck(page, args, result, problems) {
   }
 }
 
+// No two shown object labels overlap (labels.js hides the lesser of overlapping ones).
+function checkLabelsApart(a, when, problems) {
+  for (let i = 0; i < a.length; ++i)
+    for (let j = i + 1; j < a.length; ++j)
+      if (a[i].left < a[j].right && a[j].left < a[i].right && a[i].top < a[j].bottom && a[j].top < a[i].bottom)
+        problems.push(`${when}: object labels ${i} and ${j} overlap: ${JSON.stringify(a[i])} ${JSON.stringify(a[j])}`);
+}
+
 // The checks of a finished output folder (`semap view DIR`).
 async function folderChecks(page, args, result, problems) {
   // 1. The page as a person sees it.
   await page.screenshot({ path: path.join(args.out, 'viewer.png') });
+  const labels = await page.evaluate(() => window.semapViewer.labelStats());
+  result.labels_shown = labels.shown;
+  result.labels_hidden = labels.hidden;
+  checkLabelsApart(labels.rects, 'first view', problems);
 
   // 2. The canvas alone: the mesh must cover a real share of it.
   await page.evaluate(() => { document.body.classList.add('hide-ui'); window.semapViewer.render(); });
@@ -179,6 +192,18 @@ async function folderChecks(page, args, result, problems) {
       problems.push(`clicking object ${target.id} did not open its panel: ${JSON.stringify(panel)}`);
     }
     await page.screenshot({ path: path.join(args.out, 'object_panel.png') });
+
+    // 5. Zoomed in on the first object (wheel events on the canvas): labels still apart, and
+    // those hidden for overlapping come back as the objects spread (labels_zoomed.png).
+    await page.evaluate(async ({ x, y }) => {
+      const canvas = document.querySelector('#viewport canvas');
+      for (let k = 0; k < 8; ++k) canvas.dispatchEvent(new WheelEvent('wheel', { deltaY: -200, clientX: x, clientY: y, bubbles: true, cancelable: true }));
+      window.semapViewer.render();
+    }, target);
+    const zoomed = await page.evaluate(() => window.semapViewer.labelStats());
+    result.labels_hidden_zoomed = zoomed.hidden;
+    checkLabelsApart(zoomed.rects, 'zoomed in', problems);
+    await page.screenshot({ path: path.join(args.out, 'labels_zoomed.png') });
   }
 }
 

@@ -20,6 +20,8 @@ struct NavigationConfig {
   double wall_min_area_m2 = 0.4;         ///< smaller vertical planes are no wall
   double wall_min_top_m = 1.4;           ///< an unlabelled wall reaches this high (furniture stays below)
   double ceiling_min_height_m = 1.8;     ///< ceiling candidates lie at least this high
+  double esdf_max_distance_m = 2.0;      ///< 3D distance field: farther reads as this ("at least")
+  double esdf_max_memory_mb = 512.0;     ///< 3D distance field: build memory limit (cells coarsen to fit)
 
   void visit(ParamVisitor& v) {
     v.param("min_height_m", min_height_m, "m",
@@ -58,6 +60,14 @@ struct NavigationConfig {
             non_negative(100.0));
     v.param("ceiling_min_height_m", ceiling_min_height_m, "m",
             "ceiling: downward-facing horizontal surfaces at least this high above the floor", positive(100.0));
+    v.param("esdf_max_distance_m", esdf_max_distance_m, "m",
+            "3D distance queries (navigation/esdf.hpp): distances beyond this read as this (at least that far); "
+            "is_free with a larger radius answers false",
+            {0.05, 100.0});
+    v.param("esdf_max_memory_mb", esdf_max_memory_mb, "MiB",
+            "3D distance field: its build uses at most this (13 B per cell over the map's bounding box); larger "
+            "maps get cells of 2, 3, ... voxels, up to 16",
+            {1.0, 1e6});
   }
   void validate() const {
     check_param_ranges(*this, "navigation");

@@ -13,6 +13,12 @@
 // Voronoi split at the doors). Connected room space that no seed reaches is one place. A place
 // with under min_place_area_m2 of free cells is dropped and the growth repeated without its
 // seed. w = 0: one place per connected region of room space. One room gives one place.
+//
+// Passages: two places whose room-space cells touch (8-neighbourhood) share a passage, the door
+// the growth split them at. Its width is twice the largest clearance (distance to the nearest
+// closed cell, as above) among the cells along their border: where the border crosses the
+// door, the middle of the door, half the door's width from either jamb. Its centre is that
+// cell pair's midpoint.
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -31,8 +37,17 @@ struct PlaceNode {
   nlohmann::json evidence = nlohmann::json::object();  ///< how it was found (clearance, seeding)
 };
 
+/// A passage between places a < b (indices into PlaceMap::places); see the file comment.
+struct PlacePassage {
+  int a = -1, b = -1;
+  double width_m = 0.0;
+  Eigen::Vector2d centre_G = Eigen::Vector2d::Zero();
+  size_t border_cells = 0;  ///< cells of either place with a neighbour in the other
+};
+
 struct PlaceMap {
   std::vector<PlaceNode> places;
+  std::vector<PlacePassage> passages;  ///< ordered by (a, b)
   std::vector<int> place_of_cell;  ///< grid layout; index into places, -1: none
 };
 

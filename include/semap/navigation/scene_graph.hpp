@@ -19,6 +19,9 @@
 //   near(A, B)     centroids at most near_distance_m apart (A < B by id, listed once).
 //   in_place(A, P) the room-space cell (navigation/places.hpp) nearest A's box centre belongs
 //                  to place P.
+//   connected(P, Q) places P and Q (P listed first) share a passage (navigation/places.hpp:
+//                  their cells touch where the split cut a door); evidence: passage_width_m,
+//                  passage_centre_G (x, y, 0 on the floor), border_cells.
 // Nodes besides the objects: the floor (when the grid has free cells), the walls and ceiling
 // (navigation/structure.hpp) and the places (navigation/places.hpp). No relation ever has a
 // wall or the ceiling as its target: nothing is `on` a wall.
@@ -73,9 +76,12 @@ struct SceneObjectNode {
   std::vector<Eigen::Vector2d> footprint_G;  ///< centres of the grid cells its main part covers (not serialised)
 };
 
-enum class Relation : uint8_t { kOn, kIn, kNear, kInPlace };
-inline constexpr EnumNames<Relation, 4> kRelationNames{
-    {{Relation::kOn, "on"}, {Relation::kIn, "in"}, {Relation::kNear, "near"}, {Relation::kInPlace, "in_place"}}};
+enum class Relation : uint8_t { kOn, kIn, kNear, kInPlace, kConnected };
+inline constexpr EnumNames<Relation, 5> kRelationNames{{{Relation::kOn, "on"},
+                                                        {Relation::kIn, "in"},
+                                                        {Relation::kNear, "near"},
+                                                        {Relation::kInPlace, "in_place"},
+                                                        {Relation::kConnected, "connected"}}};
 
 struct SceneEdge {
   Relation relation = Relation::kOn;
