@@ -87,6 +87,14 @@ TEST_F(OutputSafety, IgnoredOptionsAndWrongKindsOfPathSaySo) {
   expect_one_line_error(r, {"folder.bag", "is a folder"});
   r = run_semap({"merge", path("dangling.bag").string(), clean().string(), "--out", path("m").string()});
   expect_one_line_error(r, {"dangling.bag", "dangling symlink"});
+  // Issue 44 (third round): `semap query OUT --class chiar` (misspelt) matched nothing and exited
+  // 0; a class name the project does not know is an error, for --class and --near.
+  for (const char* option : {"--class", "--near"}) {
+    r = run_semap({"query", path("no_run").string(), option, "chiar"});
+    expect_one_line_error(r, {option, "'chiar' is not a class name"});
+  }
+  r = run_semap({"query", path("no_run").string(), "--class", "chair"});  // known: on to the folder
+  expect_one_line_error(r, {"no_run"});
 }
 
 // Issue 44 (third round), class 4 variants: `semap segment --model precomputed:DIR --out DIR`
