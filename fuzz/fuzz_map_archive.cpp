@@ -6,14 +6,14 @@
 // The input is the file without its trailing checksum: as fuzz_map, the target appends the
 // FNV-1a 64 of bytes [12, end) so that the fuzzer reaches the sections; every 64th input is
 // loaded as-is (checksum/truncation paths).
-// Seeds (only when SEMAP_FUZZ_SEED_DIR is set): a tiny synthetic room (80x60, 2 objects) mapped
-// by Mapper with the ground-truth segmenter and saved by Mapper::save - a few keyframes, 2+
-// objects, ~30-60 KB - once with tracking (keyframes) and once with given poses (no tracking
-// section).
+// Seeds (only when SEMAP_FUZZ_SEED_DIR is set; ~20 s under ASan): the first 5 frames of a
+// synthetic room (128x96, 12 objects) mapped by Mapper with the ground-truth segmenter and saved
+// by Mapper::save, once tracked (its first 2 keyframes kept, images at half size: 64 KB, 2
+// objects) and once with given poses (no tracking section: 20 KB, 2 objects).
+#include <cstdio>
 #include <cstring>
 
 #include <opencv2/imgproc.hpp>
-#include <cstdio>
 
 #include "core/archive.hpp"
 #include "core/progress.hpp"
@@ -37,8 +37,8 @@ uint64_t fnv1a(const uint8_t* data, size_t n) {
   return h;
 }
 
-constexpr size_t kSeedFrames = 5;
-constexpr size_t kSeedKeyframes = 2;  // the start of the room's loop: small steps, tracked
+constexpr size_t kSeedFrames = 5;     // the start of the room's loop: small steps, tracked
+constexpr size_t kSeedKeyframes = 2;
 
 /// Maps the room (tracked, or with its ground-truth poses) and writes the saved file as a seed.
 void write_map_seed(const std::filesystem::path& room, bool given_poses, const std::string& name) {
@@ -78,7 +78,7 @@ void write_map_seed(const std::filesystem::path& room, bool given_poses, const s
     semap::write_map_archive(path, sections);
   }
   const std::string bytes = semap::fuzz::read_bytes(path);
-  std::fprintf(stderr, "fuzz_map_archive: seed %s: %zu bytes, %zu keyframes, %zu objects, %zu lost frames\n",
+  std::fprintf(stderr, "fuzz_map_archive: seed %s: %zu bytes (%zu keyframes mapped, at most 2 kept), %zu objects, %zu lost frames\n",
                name.c_str(), bytes.size(), mapper.stats().keyframes, mapper.stats().objects, mapper.stats().lost_frames);
   semap::fuzz::write_seed(name, bytes.substr(0, bytes.size() - 8));
 }
