@@ -52,8 +52,12 @@ void add_segment_command(CLI::App& app, CommandRunner& run) {
       auto segmenter = make_segmenter(opts->model, config.segmentation, CameraModel{});
       if (!segmenter) throw Error("--model", "'" + opts->model + "' gives no segmenter");
       // Staged and published at the end (io/output_folder.hpp); earlier calls' outputs stay.
+      // Never into the images' folder, the model or the precomputed folder read (issue 44).
+      std::vector<std::filesystem::path> inputs(opts->images.begin(), opts->images.end());
+      for (const auto& path : segmenter_input_paths(opts->model)) inputs.push_back(path);
+      if (!opts->config.empty()) inputs.emplace_back(opts->config);
       OutputFolder out(opts->out, {.tool = "segment", .refuse_foreign_non_empty = false, .remove_stale = false, .publish_last = {},
-                                   .inputs = {}});
+                                   .inputs = inputs});
       for (size_t i = 0; i < opts->images.size(); ++i) {
         throw_if_interrupted();
         const std::filesystem::path path = opts->images[i];

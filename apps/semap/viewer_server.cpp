@@ -17,10 +17,12 @@
 #include <cstdio>
 #include <map>
 #include <mutex>
+#include <tuple>
 #include <vector>
 #include <nlohmann/json.hpp>
 #include <optional>
 
+#include "apps/semap/tcp_progress.hpp"
 #include "core/paths.hpp"
 #include "io/output_folder.hpp"
 #include "semap/core/error.hpp"
@@ -63,6 +65,12 @@ constexpr size_t kKeepAliveMaxRequests = 100;
 constexpr auto kRequestReadLimit = std::chrono::seconds(5);     // a whole request arrives within this
 constexpr size_t kMaxReadingConnections = kServerThreads / 2;   // the rest serve requests that arrived
 constexpr auto kWatchdogPeriod = std::chrono::milliseconds(100);
+// Issue 44 (third round): a client that reads its response a few bytes at a time kept a thread
+// for ever (the write timeout bounds each send, not the response). After kResponseGrace, a
+// response whose peer has taken less than kMinResponseBytesPerS on average since it began is
+// cut: a response of B bytes takes at most max(5 s, B / 64 KiB/s).
+constexpr auto kResponseGrace = std::chrono::seconds(5);
+constexpr double kMinResponseBytesPerS = 64 * 1024;
 
 
 /// The regular file a URL path names, when its real path (symlinks resolved) lies inside
@@ -165,10 +173,18 @@ void serve_file(const fs::path& root_real, const httplib::Request& req, httplib:
 static std::string peer_key(const std::string& address, int port) { return address + "|" + std::to_string(port); }
 
 /// The open connections of one server by phase: reading a request (since when) or answering
-/// one. A watchdog thread finds the server's connected sockets (the process's sockets bound to
-/// its port; httplib 0.11 keeps them private) and cuts them with shutdown(2), which wakes the
-/// worker blocked on one: a request not complete after kRequestReadLimit, the oldest reading
-/// ones beyond kMaxReadingConnections, and on stop_all() every one. Thread-safe.
+/// one (since when, and how much of it the peer has taken). A watchdog thread finds the server's connected sockets (the process's
+/// sockets bound to its port; httplib 0.11 keeps them private) and cuts them with shutdown(2),
+/// which wakes the worker blocked on one: a request not complete after kRequestReadLimit, a
+/// response the peer takes too slowly (check_response_rate), the oldest reading ones beyond kMaxReadingConnections,
+/// and on stop_all() every one. Thread-safe.
+/// Listing /proc/self/fd races with the workers, which close their sockets at any time: a
+/// number listed may be closed and reused (by a new connection, a served file, another
+/// thread's socket) before it is cut. cut() therefore never acts on the listed number itself:
+/// it duplicates it, checks that the duplicate is still a connection of this port from the same
+/// peer, and shuts that down (a duplicate cannot be reused while held; shutdown acts on the
+/// connection, not the number). A socket opened or closed during a listing is merely seen one
+/// period (kWatchdogPeriod) later or not at all, which changes no decision.
 class ConnectionGuard {
  public:
   using Clock = std::chrono::steady_clock;
@@ -189,20 +205,29 @@ class ConnectionGuard {
     port_ = port;
     watchdog_ = std::thread([this] { watch(); });
   }
-  /// A request of this peer has arrived whole (answering it is not time-bounded here).
+  /// A request of this peer has arrived whole (the handler runs; answering() follows).
   void request_read(const std::string& address, int port) { set_reading(peer_key(address, port), false); }
+  /// The response starts going out: from now on the peer must take it at kMinResponseBytesPerS.
+  void answering(const std::string& address, int port) {
+    std::lock_guard lock(mutex_);
+    Connection& c = connections_[peer_key(address, port)];
+    c.answering_since = Clock::now();
+    c.acked_at_answer.reset();
+  }
   /// The response went out: the peer's next request (keep-alive) starts now.
   void response_sent(const std::string& address, int port) { set_reading(peer_key(address, port), true); }
   /// Cuts every connection, now and every one found later.
   void stop_all() {
     std::lock_guard lock(mutex_);
     stopping_ = true;
-    for (const auto& [fd, key] : scan()) ::shutdown(fd, SHUT_RDWR);
+    for (const auto& [fd, key] : scan()) cut(fd, key);
   }
 
  private:
   struct Connection {
     Clock::time_point reading_since = Clock::now();
+    std::optional<Clock::time_point> answering_since;  ///< set while a response goes out
+    std::optional<uint64_t> acked_at_answer;            ///< tcp_bytes_acked when first seen answering
     bool reading = true;
     bool seen = false;
   };
@@ -212,8 +237,25 @@ class ConnectionGuard {
     Connection& c = connections_[key];
     c.reading = reading;
     c.reading_since = Clock::now();
+    c.answering_since.reset();
   }
-  /// The process's sockets connected through the server's port: fd -> peer key.
+  /// The peer key of `fd` when it is a socket connected through the server's port.
+  std::optional<std::string> server_peer_of(int fd) const {
+    sockaddr_storage local{}, peer{};
+    socklen_t local_size = sizeof local, peer_size = sizeof peer;
+    if (::getsockname(fd, reinterpret_cast<sockaddr*>(&local), &local_size) != 0) return std::nullopt;
+    if (local.ss_family != AF_INET && local.ss_family != AF_INET6) return std::nullopt;
+    const int local_port = ntohs(local.ss_family == AF_INET ? reinterpret_cast<sockaddr_in&>(local).sin_port
+                                                           : reinterpret_cast<sockaddr_in6&>(local).sin6_port);
+    if (local_port != port_ || ::getpeername(fd, reinterpret_cast<sockaddr*>(&peer), &peer_size) != 0) return std::nullopt;
+    char host[NI_MAXHOST], service[NI_MAXSERV];
+    if (::getnameinfo(reinterpret_cast<sockaddr*>(&peer), peer_size, host, sizeof host, service, sizeof service,
+                      NI_NUMERICHOST | NI_NUMERICSERV) != 0)
+      return std::nullopt;
+    return peer_key(host, std::atoi(service));
+  }
+  /// The process's sockets connected through the server's port: fd -> peer key (a snapshot:
+  /// act on one only through cut()).
   std::vector<std::pair<int, std::string>> scan() const {
     std::vector<std::pair<int, std::string>> out;
     std::error_code ec;
@@ -221,20 +263,33 @@ class ConnectionGuard {
       int fd = -1;
       const std::string name = it->path().filename().string();
       if (std::from_chars(name.data(), name.data() + name.size(), fd).ec != std::errc()) continue;
-      sockaddr_storage local{}, peer{};
-      socklen_t local_size = sizeof local, peer_size = sizeof peer;
-      if (::getsockname(fd, reinterpret_cast<sockaddr*>(&local), &local_size) != 0) continue;
-      if (local.ss_family != AF_INET && local.ss_family != AF_INET6) continue;
-      const int local_port = ntohs(local.ss_family == AF_INET ? reinterpret_cast<sockaddr_in&>(local).sin_port
-                                                             : reinterpret_cast<sockaddr_in6&>(local).sin6_port);
-      if (local_port != port_ || ::getpeername(fd, reinterpret_cast<sockaddr*>(&peer), &peer_size) != 0) continue;
-      char host[NI_MAXHOST], service[NI_MAXSERV];
-      if (::getnameinfo(reinterpret_cast<sockaddr*>(&peer), peer_size, host, sizeof host, service, sizeof service,
-                        NI_NUMERICHOST | NI_NUMERICSERV) != 0)
-        continue;
-      out.emplace_back(fd, peer_key(host, std::atoi(service)));
+      if (auto key = server_peer_of(fd)) out.emplace_back(fd, std::move(*key));
     }
     return out;
+  }
+  /// Runs act(held) on a duplicate of `fd` when it is still the connection `key` that scan()
+  /// listed, not a number since closed or reused (see the class comment).
+  template <class Act>
+  void on_connection(int fd, const std::string& key, Act act) const {
+    const int held = ::fcntl(fd, F_DUPFD_CLOEXEC, 0);
+    if (held < 0) return;
+    if (server_peer_of(held) == key) act(held);
+    ::close(held);
+  }
+  void cut(int fd, const std::string& key) const {
+    on_connection(fd, key, [](int held) { ::shutdown(held, SHUT_RDWR); });
+  }
+  /// Cuts an answering connection whose peer takes the response too slowly (kResponseGrace).
+  void check_response_rate(int fd, const std::string& key, Connection& c, Clock::time_point now) const {
+    on_connection(fd, key, [&](int held) {
+      const std::optional<uint64_t> acked = tcp_bytes_acked(held);
+      if (!acked) return;
+      if (!c.acked_at_answer) c.acked_at_answer = *acked;
+      const double seconds = std::chrono::duration<double>(now - *c.answering_since).count();
+      if (now - *c.answering_since > kResponseGrace &&
+          static_cast<double>(*acked - *c.acked_at_answer) < kMinResponseBytesPerS * seconds)
+        ::shutdown(held, SHUT_RDWR);
+    });
   }
   void watch() {
     std::unique_lock lock(mutex_);
@@ -242,17 +297,19 @@ class ConnectionGuard {
       wake_.wait_for(lock, kWatchdogPeriod);
       const auto now = Clock::now();
       for (auto& [key, c] : connections_) c.seen = false;
-      std::vector<std::pair<Clock::time_point, int>> reading;  // (since, fd)
+      std::vector<std::tuple<Clock::time_point, int, std::string>> reading;  // (since, fd, key)
       for (const auto& [fd, key] : scan()) {
         Connection& c = connections_[key];  // new: reading since now
         c.seen = true;
-        if (stopping_ || (c.reading && now - c.reading_since > kRequestReadLimit)) ::shutdown(fd, SHUT_RDWR);
-        else if (c.reading) reading.emplace_back(c.reading_since, fd);
+        if (stopping_ || (c.reading && now - c.reading_since > kRequestReadLimit)) cut(fd, key);
+        else if (c.reading) reading.emplace_back(c.reading_since, fd, key);
+        else if (c.answering_since) check_response_rate(fd, key, c, now);
       }
       std::erase_if(connections_, [](const auto& entry) { return !entry.second.seen; });
       if (reading.size() <= kMaxReadingConnections) continue;
       std::sort(reading.begin(), reading.end());
-      for (size_t k = 0; k + kMaxReadingConnections < reading.size(); ++k) ::shutdown(reading[k].second, SHUT_RDWR);
+      for (size_t k = 0; k + kMaxReadingConnections < reading.size(); ++k)
+        cut(std::get<1>(reading[k]), std::get<2>(reading[k]));
     }
   }
 
@@ -291,8 +348,9 @@ ViewerServer::ViewerServer(const std::string& host, int port)
     guard_->response_sent(req.remote_addr, req.remote_port);
   });
   // Outputs change between runs (and a live map every second): never show a stale one.
-  server.set_post_routing_handler([](const httplib::Request&, httplib::Response& res) {
+  server.set_post_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
     res.set_header("Cache-Control", "no-store");
+    guard_->answering(req.remote_addr, req.remote_port);
   });
   server.Get("/", [](const httplib::Request&, httplib::Response& res) { res.set_redirect("/viewer/index.html"); });
   if (port == 0) {

@@ -3,9 +3,10 @@
 // output folder) and `semap run --view` (the growing map, served from memory). Hardened as
 // issue 22 asks: only regular files whose real path is inside the served folder, at most one
 // byte range per request, idle connections dropped after 2 s, no-store caching, GET only.
-// Issue 44 (class 6): a request must arrive whole within 5 s (not only byte by byte), clients
-// still sending their request hold at most half the threads, and stopping cuts every connection
-// instead of waiting for slow clients.
+// Issue 44 (class 6): a request must arrive whole within 5 s (not only byte by byte), a response
+// must be taken at 64 KiB/s on average after 5 s (not only send by send), clients still sending their
+// request hold at most half the threads, and stopping cuts every connection instead of waiting
+// for slow clients.
 #include <filesystem>
 #include <memory>
 #include <string>

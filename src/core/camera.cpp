@@ -57,6 +57,10 @@ void validate_camera(const CameraModel& camera, const std::string& source) {
   if (!T.matrix().allFinite() || T.translation().norm() > L::kMaxColourBaseline)
     throw Error(source, "camera colour.T_depth_colour baseline = " + compact_number(T.translation().norm()) +
                             " m is more than " + compact_number(L::kMaxColourBaseline) + " m");
+  // Issue 44: the readers check the extrinsic files they parse; a camera from elsewhere (a saved
+  // map's camera section, the Python API) only here. Same tolerance as the readers.
+  if (!is_valid_pose(T, 1e-3))
+    throw Error(source, "camera colour.T_depth_colour is not a rigid transform (rotation not orthonormal)");
 }
 
 Eigen::Matrix3d PinholeIntrinsics::K() const {

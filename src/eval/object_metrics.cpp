@@ -19,10 +19,12 @@ namespace {
 
 using VoxelSet = std::vector<uint64_t>;  // sorted, unique packed voxel keys
 
-/// Surface samples all ground-truth boxes of a scene.json may make together (12 bytes each,
-/// ~0.5 GB with their k-d trees): a file of thousands of large boxes is refused, not sampled into
-/// gigabytes (issue 44, class 2; README, reliability).
-constexpr size_t kMaxGtSamplePoints = 20'000'000;
+/// Points each side of an object evaluation may hold together (12 bytes each; 10M map points
+/// measured 0.57 GB peak with their k-d trees): the surface samples of all ground-truth boxes of
+/// a scene.json, and the points of all map objects of an objects.json. A file of thousands of large boxes, or of thousands of
+/// objects naming one large points file, is refused, not read into gigabytes (issue 44, class 2;
+/// README, reliability).
+constexpr size_t kMaxObjectEvalPoints = 20'000'000;
 
 // Origin of the evaluation grid, in voxels. Not 0 (nor any simple fraction): synthetic and built
 // scenes put faces at round coordinates, and a face on a cell border splits between two voxel
@@ -359,9 +361,9 @@ std::vector<EvalObject> gt_objects_from_scene_json(const std::filesystem::path& 
     } catch (const std::exception& e) {
       throw Error(path, "object " + std::to_string(k) + ": " + e.what());
     }
-    if (total_points > kMaxGtSamplePoints)
+    if (total_points > kMaxObjectEvalPoints)
       throw Error(path, "the objects up to object " + std::to_string(k) + " sample to more than " +
-                            std::to_string(kMaxGtSamplePoints) + " surface points at " + compact_number(spacing) +
+                            std::to_string(kMaxObjectEvalPoints) + " surface points at " + compact_number(spacing) +
                             " m spacing (limit); evaluate fewer or smaller objects, or a larger --voxel");
     ++k;
   }
@@ -389,7 +391,8 @@ std::vector<EvalObject> load_map_objects(const std::filesystem::path& objects_js
   if (!doc.contains("objects") || !doc["objects"].is_array()) throw Error(objects_json, "no \"objects\" array");
   const auto folder = objects_json.parent_path();
   std::vector<EvalObject> out;
-  size_t k = 0;
+  std::map<std::filesystem::path, std::vector<Eigen::Vector3f>> read_files;  // a file named twice is read once
+  size_t k = 0, total_points = 0;
   for (const auto& jo : doc["objects"]) {
     EvalObject o;
     try {
@@ -402,7 +405,15 @@ std::vector<EvalObject> load_map_objects(const std::filesystem::path& objects_js
                                    ? static_cast<size_t>(json_number(jo["point_count"], "point_count", 0, 1e15, true)) : 1;
     if (jo.contains("points_file") && jo["points_file"].is_string()) {
       const auto file = folder / jo["points_file"].get<std::string>();
-      if (std::filesystem::exists(file) || point_count > 0) o.points = read_ply(file).vertices.points;
+      if (std::filesystem::exists(file) || point_count > 0) {
+        auto [it, inserted] = read_files.try_emplace(file);
+        if (inserted) it->second = read_ply(file).vertices.points;
+        total_points += it->second.size();
+        if (total_points > kMaxObjectEvalPoints)
+          throw Error(objects_json, "the objects up to object " + std::to_string(o.id) + " hold more than " +
+                                        std::to_string(kMaxObjectEvalPoints) + " points (limit)");
+        o.points = it->second;
+      }
     } else if (point_count > 0) {
       throw Error(objects_json, "object " + std::to_string(o.id) + " has no \"points_file\"");
     }

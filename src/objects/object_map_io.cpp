@@ -18,6 +18,9 @@ namespace {
 // written with fewer classes still reads (format 1 had no count: 39 classes, ids 0..38).
 constexpr uint32_t kObjectStateFormat = 2;
 constexpr uint32_t kFormat1Classes = 39;
+/// Issue 44 (fuzz_map_archive): a saved object point farther out than this is corrupt (the map
+/// voxel key of a point at 1e20 m overflowed its integer cell).
+constexpr float kMaxObjectCoordinateM = 1e6f;
 
 void put_instance(ByteWriter& w, const ObjectInstance& inst) {
   w.put(inst.id), w.put(static_cast<int32_t>(inst.n));
@@ -80,6 +83,7 @@ void ObjectMap::decode_state(std::string_view bytes, const std::filesystem::path
     for (size_t i = 0; i < n_points; ++i) {
       r.read(points[i].data(), 3 * sizeof(float));
       if (!points[i].allFinite()) r.fail("an object point is not finite");
+      if (points[i].cwiseAbs().maxCoeff() > kMaxObjectCoordinateM) r.fail("an object point lies beyond 1e6 m");
       colours[i] = r.get<Rgb8>();
     }
     add_points(inst, points, colours, {kSavedMapFrame});

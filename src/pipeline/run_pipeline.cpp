@@ -350,6 +350,9 @@ RunResult run_pipeline(const RunOptions& options, const SemapConfig& config) {
   // Never the dataset or the map to resume, nor a folder holding one (issue 44).
   std::vector<std::filesystem::path> inputs = {options.resume_from};
   if (!options.dataset_inside_out_dir) inputs.push_back(options.dataset);
+  // The models and precomputed:DIR the segmenter reads (the option's spec or the config's).
+  for (const auto& path : segmenter_input_paths(options.segmenter.empty() ? config.segmentation.segmenter : options.segmenter))
+    inputs.push_back(path);
   OutputFolder out(options.out_dir, {.tool = "run", .publish_last = {"report.html", "report.json"}, .inputs = inputs,
                                      .planned = map_output_files()});
   const DatasetReader* dataset = source->dataset();

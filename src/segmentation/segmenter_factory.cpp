@@ -52,6 +52,16 @@ std::pair<std::string, std::string> split_panoptic(const std::string& spec, cons
 
 }  // namespace
 
+std::vector<std::filesystem::path> segmenter_input_paths(const std::string& spec) {
+  if (spec.empty() || spec == "none" || spec == kDefaultSegmenterSpec || spec == "groundtruth") return {};
+  const size_t colon = spec.find(':');
+  if (colon == std::string::npos) return {spec};
+  const std::string kind = spec.substr(0, colon), path = spec.substr(colon + 1);
+  if (kind != "panoptic") return {path};
+  const auto [semantic_path, instance_path] = split_panoptic(spec, path);
+  return {semantic_path, instance_path};
+}
+
 std::unique_ptr<Segmenter> make_segmenter(const std::string& spec, const SegmentationConfig& config,
                                           const CameraModel& camera) {
   if (spec.empty() || spec == "none" || spec == kDefaultSegmenterSpec) return nullptr;

@@ -118,6 +118,26 @@ TEST(EvalHardening, ThousandsOfLargeGroundTruthObjectsAreRefusedByTheSampleLimit
   EXPECT_NE(message.find("surface points"), std::string::npos) << message;
 }
 
+// Issue 44 (third round), class 2 variant: memory followed the number of references, not the
+// files - a 33 KB objects.json naming one 1.2 MB points file 400 times reached 1.9 GB (4,000
+// times: ~19 GB). Each file is read once, and the map side holds at most as many points as the
+// ground-truth side may sample.
+TEST(EvalHardening, ObjectsNamingOnePointsFileThousandsOfTimesAreRefusedByThePointLimit) {
+  test::TempDir dir;
+  TriangleMesh cloud;
+  for (int i = 0; i < 100'000; ++i) cloud.vertices.points.emplace_back(0.01f * (i % 100), 0.01f * (i / 100 % 100), 0.01f * (i / 10'000));
+  write_ply(dir / "points.ply", cloud);
+  std::string objects;
+  for (int k = 0; k < 400; ++k)
+    objects += std::string(k ? "," : "") + "{\"id\": " + std::to_string(k + 1) +
+               ", \"class\": \"table\", \"point_count\": 100000, \"points_file\": \"points.ply\"}";
+  test::write_text(dir / "objects.json", "{\"objects\": [" + objects + "]}");
+  test::write_text(dir / "scene.json", "{\"objects\": []}");
+  const std::string message = error_of([&] { evaluate_object_files(dir / "scene.json", dir / "objects.json"); });
+  EXPECT_NE(message.find("objects.json"), std::string::npos) << message;
+  EXPECT_NE(message.find("points (limit)"), std::string::npos) << message;
+}
+
 TEST(EvalHardening, LabelOutsideTheClassIdRangeIsNamedNotClamped) {
   test::TempDir dir;
   auto ply = [&](const std::string& name, const std::string& label) {

@@ -114,6 +114,16 @@ TEST(HardeningCamera, PresetsPassAndUnphysicalMagnitudesAreRefusedNamingTheKey) 
          c.colour = CameraModel::ColourCamera{c.depth, Pose::Identity()};
          c.colour->T_depth_colour.translation() = Eigen::Vector3d(5, 0, 0);
        }), "baseline"},
+      // Issue 44 (third round), class 3 variant: a colour extrinsic that scales or shears (a
+      // saved map's camera section was accepted with it and registered colours wrongly).
+      {with([](CameraModel& c) {
+         c.colour = CameraModel::ColourCamera{c.depth, Pose::Identity()};
+         c.colour->T_depth_colour.linear() *= 2.0;
+       }), "colour.T_depth_colour is not a rigid transform"},
+      {with([](CameraModel& c) {
+         c.colour = CameraModel::ColourCamera{c.depth, Pose::Identity()};
+         c.colour->T_depth_colour.linear()(0, 1) = 0.3;
+       }), "colour.T_depth_colour is not a rigid transform"},
   };
   for (const auto& [message, part] : cases) {
     EXPECT_TRUE(mentions(message, "dataset.yaml: camera")) << message;

@@ -7,7 +7,11 @@
 #include <filesystem>
 #include <set>
 
+#include <opencv2/imgcodecs.hpp>
+
 #include "io/output_folder.hpp"
+#include "segmentation/groundtruth_segmenter.hpp"
+#include "segmentation/segmentation_io.hpp"
 #include "reliability/reliability_support.hpp"
 #include "semap/pipeline/outputs.hpp"
 
@@ -83,6 +87,43 @@ TEST_F(OutputSafety, IgnoredOptionsAndWrongKindsOfPathSaySo) {
   expect_one_line_error(r, {"folder.bag", "is a folder"});
   r = run_semap({"merge", path("dangling.bag").string(), clean().string(), "--out", path("m").string()});
   expect_one_line_error(r, {"dangling.bag", "dangling symlink"});
+  // Issue 44 (third round): `semap query OUT --class chiar` (misspelt) matched nothing and exited
+  // 0; a class name the project does not know is an error, for --class and --near.
+  for (const char* option : {"--class", "--near"}) {
+    r = run_semap({"query", path("no_run").string(), option, "chiar"});
+    expect_one_line_error(r, {option, "'chiar' is not a class name"});
+  }
+  r = run_semap({"query", path("no_run").string(), "--class", "chair"});  // known: on to the folder
+  expect_one_line_error(r, {"no_run"});
+}
+
+// Issue 44 (third round), class 4 variants: `semap segment --model precomputed:DIR --out DIR`
+// rewrote the precomputed segmentation it was reading (written by an earlier segment, so the
+// manifest rule let it), and `--out` over the images' folder wrote beside the inputs. The
+// images, the model or precomputed folder (and `semap run --segmenter precomputed:DIR`) are
+// inputs like the dataset: an output folder that is or holds one is refused.
+TEST_F(OutputSafety, SegmentAndRunNeverWriteIntoTheirImagesOrPrecomputedFolder) {
+  const fs::path images = path("seg_images"), pre = path("precomputed");
+  fs::create_directories(images);
+  fs::create_directories(pre);
+  fs::copy_file(clean() / "rgb" / "000000.png", images / "000000.png");
+  const cv::Mat bgr = cv::imread((images / "000000.png").string(), cv::IMREAD_COLOR);
+  cv::Mat labels(bgr.size(), CV_8UC1, cv::Scalar(0)), instances(bgr.size(), CV_16UC1, cv::Scalar(0));
+  labels(cv::Rect(10, 10, 40, 30)).setTo(5);
+  instances(cv::Rect(10, 10, 40, 30)).setTo(1);
+  write_segmentation(pre, "000000", bgr, result_from_label_images(labels, instances), "test");
+  const auto before = snapshot(tmp_->path());
+  const std::string image = (images / "000000.png").string(), model = "precomputed:" + pre.string();
+  for (const fs::path& out : {pre, images}) {
+    const auto r = run_semap({"segment", image, "--model", model, "--out", out.string()});
+    expect_one_line_error(r, {out.string(), "input"});
+  }
+  expect_one_line_error(run_semap(run_args(clean(), pre, {"--segmenter", model})), {pre.string(), "input"});
+  EXPECT_EQ(changes(before, snapshot(tmp_->path())), "");
+  // Elsewhere it writes (the refusals above are about the folder, not the inputs).
+  const auto ok = run_semap({"segment", image, "--model", model, "--out", path("seg_out").string()});
+  EXPECT_EQ(ok.exit_code, 0) << ok.output;
+  EXPECT_EQ(slurp(path("seg_out") / "000000.json").empty(), false);
 }
 
 }  // namespace

@@ -277,5 +277,52 @@ TEST_F(ViewerServer, SlowClientsCannotHoldRequestsOrShutdown) {
   EXPECT_LT(stop_s, 2.0) << "Ctrl-C waited for slow clients";
 }
 
+// Issue 44 (third round), class 6 variant: clients that read their response a little at a time
+// (each send of the server progresses, so the per-send write timeout never fires) must not hold
+// a thread for the whole file: after 5 s, a response taken at under 64 KiB/s on average is cut.
+TEST_F(ViewerServer, SlowReadersAreCutWhenTheResponseIsNotTakenInTime) {
+  std::string big;
+  for (int k = 0; k < 8; ++k) big += data_;
+  spit(out_ / "big.bin", big);
+  START_OR_SKIP();
+  constexpr int kReaders = 6;
+  std::vector<int> readers;
+  for (int k = 0; k < kReaders; ++k) {
+    const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+    const int small = 4096;  // a small window: the server's sends block on the reader
+    ::setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
+    sockaddr_in addr{};
+    addr.sin_family = AF_INET;
+    addr.sin_port = htons(static_cast<uint16_t>(port_));
+    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+    const std::string request = "GET /big.bin HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n";
+    ASSERT_EQ(::send(fd, request.data(), request.size(), MSG_NOSIGNAL), static_cast<ssize_t>(request.size()));
+    readers.push_back(fd);
+  }
+  // 1 KB per reader every 200 ms (5 KB/s): the 8 MiB file (more than the socket buffers hold)
+  // would take 30 minutes.
+  std::vector<size_t> received(kReaders, 0);
+  const auto t0 = std::chrono::steady_clock::now();
+  char buffer[1 << 16];
+  while (std::chrono::steady_clock::now() - t0 < std::chrono::milliseconds(5500)) {
+    for (int k = 0; k < kReaders; ++k) {
+      const ssize_t n = ::recv(readers[k], buffer, 1024, MSG_DONTWAIT);
+      if (n > 0) received[k] += static_cast<size_t>(n);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
+  // Then read fast: a connection still served would now deliver the whole file.
+  for (int k = 0; k < kReaders; ++k) {
+    timeval timeout{1, 0};
+    ::setsockopt(readers[k], SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
+    for (ssize_t n; (n = ::recv(readers[k], buffer, sizeof buffer, 0)) > 0;) received[k] += static_cast<size_t>(n);
+    ::close(readers[k]);
+    EXPECT_LT(received[k], big.size()) << "reader " << k << " was served the whole file at 5 KB/s";
+    EXPECT_GT(received[k], 0u);
+  }
+  EXPECT_EQ(http_get(port_, "/viewer/viewer.json").status, 200);
+}
+
 }  // namespace
 }  // namespace semap

@@ -20,8 +20,10 @@
 // Network and precomputed outputs are computed on the colour image; when `camera` has a
 // separate colour camera (METHODS B2) and config.register_to_depth is set, they are
 // resampled to depth pixels (frames must carry depth) before they are returned.
+#include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "semap/core/camera.hpp"
 #include "semap/segmentation/segmentation_config.hpp"
@@ -31,6 +33,11 @@ namespace semap {
 
 /// The spec that asks the run driver for the default models (segmentation.segmenter default).
 inline constexpr const char* kDefaultSegmenterSpec = "default";
+
+/// The files and folders a spec reads (model files, the precomputed folder): inputs that an
+/// output folder may not be nor contain (issue 44). Throws like make_segmenter for a bad
+/// panoptic spec.
+std::vector<std::filesystem::path> segmenter_input_paths(const std::string& spec);
 
 /// Throws semap::Error naming the model file (missing, not ONNX, wrong outputs) or the spec.
 std::unique_ptr<Segmenter> make_segmenter(const std::string& spec, const SegmentationConfig& config,
