@@ -34,7 +34,7 @@ void add_query_command(CLI::App& app, CommandRunner& run) {
   cmd->callback([&run, args] {
     run = [args]() -> int {
       const SceneGraph graph = load_scene_graph(args->out);
-      for (const nlohmann::json& j : query_scene_graph(graph, args->query)) std::printf("%s\n", j.dump().c_str());
+      query_scene_graph(graph, args->query, [](const nlohmann::json& j) { std::printf("%s\n", j.dump().c_str()); });
       return 0;
     };
   });

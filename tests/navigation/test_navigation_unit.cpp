@@ -172,3 +172,38 @@ TEST(NavigationUnit, ClutteredTableCarriesItsCupAndHoldsNothing) {
   }
   EXPECT_EQ(on, 1u);
 }
+
+namespace semap {
+namespace {
+
+TEST(NavigationUnit, QueriesListTheNearestMatchesAndCountTheRest) {
+  // 300 chairs on a 10 cm grid around a cup on a table: every chair is near the cup.
+  SceneGraph graph;
+  graph.config.near_distance_m = 10.0;
+  SceneObjectNode table{.id = 1, .class_name = "table"}, cup{.id = 2, .class_name = "cup"};
+  cup.centroid_G = {0.0, 0.0, 0.8};
+  graph.objects = {table, cup};
+  for (uint32_t k = 0; k < 300; ++k) {
+    SceneObjectNode chair{.id = 10 + k, .class_name = "chair"};
+    chair.centroid_G = {0.1 * (1 + k % 20), 0.1 * (k / 20), 0.8};
+    graph.objects.push_back(chair);
+  }
+  graph.edges.push_back({Relation::kOn, "object_2", "object_1", {{"gap_m", 0.0}}});
+  const std::vector<nlohmann::json> near = query_scene_graph(graph, {.class_name = "cup", .near = "chair"});
+  ASSERT_EQ(near.size(), 1u);
+  const nlohmann::json& matches = near[0]["matches"];
+  ASSERT_EQ(matches.size(), kMaxQueryMatchesPerObject);
+  EXPECT_EQ(near[0]["matches_total"].get<size_t>(), 300u);
+  EXPECT_EQ(matches[0]["target"], "object_10");  // 10 cm away: the nearest first
+  for (size_t k = 1; k < matches.size(); ++k)
+    EXPECT_LE(matches[k - 1]["evidence"]["distance_m"].get<double>(), matches[k]["evidence"]["distance_m"].get<double>());
+  // Relations by edge: the cup is on the table; no chair is on anything.
+  const auto on = query_scene_graph(graph, {.on = "table"});
+  ASSERT_EQ(on.size(), 1u);
+  EXPECT_EQ(on[0]["id"], "object_2");
+  EXPECT_EQ(on[0]["matches_total"].get<size_t>(), 1u);
+  EXPECT_TRUE(query_scene_graph(graph, {.class_name = "chair", .on = "table"}).empty());
+}
+
+}  // namespace
+}  // namespace semap

@@ -27,6 +27,7 @@
 // wall or the ceiling as its target: nothing is `on` a wall.
 #include <Eigen/Core>
 #include <filesystem>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -123,8 +124,15 @@ struct SceneQuery {
   std::string class_name, on, in, near;
   double within_m = -1.0;
 };
+/// At most this many matches are listed per object (the nearest first for `near`);
+/// "matches_total" counts them all. Bounds the answer on graphs of thousands of objects.
+inline constexpr size_t kMaxQueryMatchesPerObject = 16;
 /// One JSON object per matching object node: the node (as in scene_graph.json) plus "matches",
-/// the relations that satisfied the query with their evidence. In node order.
+/// the relations that satisfied the query with their evidence, and "matches_total". In node
+/// order, each given to `emit` as it is found (semap query prints them as JSON lines).
+void query_scene_graph(const SceneGraph& graph, const SceneQuery& query,
+                       const std::function<void(const nlohmann::json&)>& emit);
+/// The same, collected.
 std::vector<nlohmann::json> query_scene_graph(const SceneGraph& graph, const SceneQuery& query);
 
 }  // namespace semap
