@@ -82,12 +82,51 @@ TEST(Gravity, CamerasLookingDownUseTheirLevelAxes) {
   std::printf("[gravity] looking down: level-axes prior error %.2f deg, mean -y prior %.2f deg -> %.2f deg\n",
               g.prior_to_up_deg, mean_y_prior.prior_to_up_deg, angle_deg(mean_y_prior.up_W, up_true));
   EXPECT_LT(g.prior_to_up_deg, 2.0);
-  EXPECT_GT(mean_y_prior.prior_to_up_deg, 25.0);  // outside the cone: only noisy floor triangles reach it
+  // The mean -y prior alone is ~30 deg off, outside the refinement cone; the floor labels
+  // overrule it (FloorLabelsOverruleACameraPanningAboutItsOwnAxis).
+  EXPECT_EQ(mean_y_prior.method, GravityMethod::kFloorLabels);
+  EXPECT_LT(angle_deg(mean_y_prior.up_W, up_true), 1.0);
 
   // A camera that never turns: its x axes span no plane, the mean -y is the prior.
   const GravityEstimate still = estimate_gravity(TriangleMesh{}, handheld_trajectory(0.0, 0.0, 15.0));
   EXPECT_EQ(still.method, GravityMethod::kTrajectory);
   EXPECT_LT(angle_deg(still.up_W, Eigen::Vector3d::UnitZ()), 1.0);
+}
+
+TEST(Gravity, FloorLabelsOverruleACameraPanningAboutItsOwnAxis) {
+  // Held pitched down 50 deg and panned +-40 deg about its own y axis (not about the vertical),
+  // as in TUM fr1_rpy: the x axes sweep a plane tilted ~50 deg, so the level-axes prior is far
+  // off and the labelled floor lies outside its refinement cone.
+  TriangleMesh mesh = room_mesh();
+  Trajectory trajectory;
+  const double rad = std::numbers::pi / 180.0;
+  for (int i = 0; i < 120; ++i) {
+    Eigen::Matrix3d level;  // looking along +x, image rows along -y, image down = -z
+    level.col(0) = Eigen::Vector3d(0, -1, 0);
+    level.col(1) = Eigen::Vector3d(0, 0, -1);
+    level.col(2) = Eigen::Vector3d(1, 0, 0);
+    StampedPose p;
+    p.timestamp = i / 30.0;
+    p.T_world_camera.linear() = level * Eigen::AngleAxisd(-50.0 * rad, Eigen::Vector3d::UnitX()).toRotationMatrix() *
+                                Eigen::AngleAxisd(40.0 * rad * std::sin(i / 20.0), Eigen::Vector3d::UnitY()).toRotationMatrix();
+    p.T_world_camera.translation() = Eigen::Vector3d(1.0, 2.0, 1.5);
+    trajectory.push_back(p);
+  }
+  const Pose T = tilted_world();
+  test::transform(T, mesh, trajectory);
+  const Eigen::Vector3d up_true = T.linear().col(2);
+  const GravityEstimate g = estimate_gravity(mesh, trajectory);
+  TriangleMesh unlabelled = mesh;
+  unlabelled.vertices.labels.clear();
+  const GravityEstimate without_labels = estimate_gravity(unlabelled, trajectory);
+  std::printf("[gravity] panning about its own axis: unlabelled mesh (the cameras' prior) %.1f deg off, labelled %.2f deg\n",
+              angle_deg(without_labels.up_W, up_true), angle_deg(g.up_W, up_true));
+  EXPECT_GT(angle_deg(without_labels.up_W, up_true), 25.0);  // what the floor labels correct
+  EXPECT_NE(without_labels.method, GravityMethod::kFloorLabels);
+  EXPECT_LT(angle_deg(g.up_W, up_true), 1.0);
+  EXPECT_EQ(g.method, GravityMethod::kFloorLabels);
+  ASSERT_TRUE(g.floor_found);
+  EXPECT_NEAR(g.floor_height_m, up_true.dot(T.translation()), 0.015);
 }
 
 TEST(Gravity, NoFloorVisibleKeepsTheTrajectoryUp) {

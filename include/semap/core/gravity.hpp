@@ -12,7 +12,11 @@
 //     x axes (image rows) stay level however they pitch, so when the x axes span a plane (the
 //     camera turned) up is the direction most perpendicular to all of them, turned to agree
 //     with the mean -y. Without a trajectory: the floor-labelled triangles' mean normal turned
-//     toward the mesh centre, else +z.
+//     toward the mesh centre, else +z. The floor labels also overrule the cameras' prior when
+//     at least twice as much floor-labelled area faces their own dominant normal as faces the
+//     prior (a camera held pitched down that pans about its own y axis sweeps its x axes
+//     through a tilted plane: TUM fr1_rpy's level-axes prior is 50 deg off); method
+//     floor_labels then.
 //  2. Refinement (refine_iterations times): the area-weighted mean normal of the triangles whose
 //     normal lies within prior_cone_deg of the current up (each turned to agree with it):
 //     floor-labelled ones when they hold at least min_refine_area_m2, else every such triangle
@@ -51,7 +55,7 @@ struct GravityOptions {
 /// How up_W was found.
 enum class GravityMethod : uint8_t {
   kZAxis,                  ///< no trajectory, no floor labels: +z of the world
-  kFloorLabels,            ///< no trajectory: floor-labelled triangles
+  kFloorLabels,            ///< floor-labelled triangles (no trajectory, or it contradicts them)
   kTrajectory,             ///< the cameras' mean up; no horizontal surface to refine it
   kTrajectoryFloorLabels,  ///< trajectory prior refined by floor-labelled triangles
   kTrajectoryHorizontal,   ///< trajectory prior refined by every near-horizontal triangle
