@@ -27,16 +27,6 @@
 
 namespace {
 
-// The checksum of the map format (core/archive.hpp: FNV-1a 64 of everything after the version).
-uint64_t fnv1a(const uint8_t* data, size_t n) {
-  uint64_t h = 1469598103934665603ULL;
-  for (size_t i = 0; i < n; ++i) {
-    h ^= data[i];
-    h *= 1099511628211ULL;
-  }
-  return h;
-}
-
 constexpr size_t kSeedFrames = 5;     // the start of the room's loop: small steps, tracked
 constexpr size_t kSeedKeyframes = 2;
 
@@ -112,11 +102,7 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 }
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  std::string bytes(reinterpret_cast<const char*>(data), size);
-  if (size >= 12 && fnv1a(data, size) % 64 != 0) {
-    const uint64_t sum = fnv1a(data + 12, size - 12);
-    bytes.append(reinterpret_cast<const char*>(&sum), sizeof sum);
-  }
+  const std::string bytes = semap::fuzz::with_map_checksum(data, size);
   const auto path = semap::fuzz::scratch_dir() / "map.semap";
   semap::fuzz::write_bytes(path, bytes);
   try {

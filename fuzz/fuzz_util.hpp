@@ -54,4 +54,25 @@ inline std::string read_bytes(const std::filesystem::path& p) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
+/// A map.semap input with its checksum (core/archive.hpp: FNV-1a 64 of the bytes after the
+/// 12-byte head) appended as write_map_archive does, so that the fuzzer reaches the section table
+/// and the sections instead of stopping at the checksum; every 64th input is left as it is (the
+/// checksum and truncation paths).
+inline std::string with_map_checksum(const uint8_t* data, size_t size) {
+  const auto fnv1a = [](const uint8_t* p, size_t n) {
+    uint64_t h = 1469598103934665603ULL;
+    for (size_t i = 0; i < n; ++i) {
+      h ^= p[i];
+      h *= 1099511628211ULL;
+    }
+    return h;
+  };
+  std::string bytes(reinterpret_cast<const char*>(data), size);
+  if (size >= 12 && fnv1a(data, size) % 64 != 0) {
+    const uint64_t sum = fnv1a(data + 12, size - 12);
+    bytes.append(reinterpret_cast<const char*>(&sum), sizeof sum);
+  }
+  return bytes;
+}
+
 }  // namespace semap::fuzz
