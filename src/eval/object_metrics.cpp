@@ -13,6 +13,7 @@
 #include "eval/nearest_neighbors.hpp"
 #include "io/json_number.hpp"
 #include "semap/io/ply_io.hpp"
+#include "core/json_text.hpp"
 
 namespace semap {
 namespace {
@@ -202,7 +203,7 @@ nlohmann::json read_json(const std::filesystem::path& path) {
   try {
     return nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {
-    throw Error(path, std::string("malformed JSON: ") + e.what());
+    throw Error(path, "malformed JSON: " + json_error_text(e));
   }
 }
 
@@ -359,7 +360,7 @@ std::vector<EvalObject> gt_objects_from_scene_json(const std::filesystem::path& 
       total_points += o.points.size();
       out.push_back(std::move(o));
     } catch (const std::exception& e) {
-      throw Error(path, "object " + std::to_string(k) + ": " + e.what());
+      throw Error(path, "object " + std::to_string(k) + ": " + json_error_text(e));
     }
     if (total_points > kMaxObjectEvalPoints)
       throw Error(path, "the objects up to object " + std::to_string(k) + " sample to more than " +

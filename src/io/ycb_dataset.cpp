@@ -12,6 +12,7 @@
 #include "semap/core/error.hpp"
 #include "io/dataset_layouts.hpp"
 #include "io/text_util.hpp"
+#include "core/json_text.hpp"
 
 namespace semap::io_detail {
 
@@ -92,7 +93,7 @@ CameraModel read_camera(const fs::path& base, const fs::path& frames) {
     camera.depth = {params[0], params[1], params[2], params[3], static_cast<int>(json_number(model.at("width"), "width", 0, 1e6, true)),
                     static_cast<int>(json_number(model.at("height"), "height", 0, 1e6, true))};
   } catch (const nlohmann::json::exception& e) {
-    throw Error(json_file, std::string("malformed camera JSON: ") + e.what());
+    throw Error(json_file, "malformed camera JSON: " + json_error_text(e));
   }
   validate_camera(camera, json_file.string());
   return camera;

@@ -4,6 +4,7 @@
 
 #include "semap/core/error.hpp"
 #include "semap/navigation/scene_graph.hpp"
+#include "core/json_text.hpp"
 
 namespace semap {
 namespace {
@@ -145,7 +146,7 @@ SceneGraph scene_graph_from_json(const nlohmann::json& j, const std::string& sou
     }
     return g;
   } catch (const nlohmann::json::exception& e) {
-    throw Error(source, std::string("malformed scene graph: ") + e.what());
+    throw Error(source, "malformed scene graph: " + json_error_text(e));
   }
 }
 

@@ -12,6 +12,7 @@
 #include "io/json_number.hpp"
 #include "segmentation/class_mapping.hpp"
 #include "segmentation/segmentation_utils.hpp"
+#include "core/json_text.hpp"
 
 namespace semap {
 
@@ -154,7 +155,7 @@ SegmentationResult PrecomputedSegmenter::read(const std::string& name) const {
       r.instances.push_back(std::move(inst));
     }
   } catch (const nlohmann::json::exception& e) {
-    throw Error(json_path, std::string("bad instance entry: ") + e.what());
+    throw Error(json_path, "bad instance entry: " + json_error_text(e));
   }
   return r;
 }

@@ -138,6 +138,19 @@ TEST(EvalHardening, ObjectsNamingOnePointsFileThousandsOfTimesAreRefusedByThePoi
   EXPECT_NE(message.find("points (limit)"), std::string::npos) << message;
 }
 
+// Class 8 variant: a ground-truth object without its instance id said "[json.exception.
+// out_of_range.403] key 'instance_id' not found" (the JSON library's tag); the file, the object
+// and the missing key are what a user needs.
+TEST(EvalHardening, MissingKeysAreNamedWithoutTheJsonLibraryTag) {
+  test::TempDir dir;
+  test::write_text(dir / "scene.json", "{\"objects\": [{\"class\": \"table\"}]}");
+  test::write_text(dir / "objects.json", "{\"objects\": []}");
+  const std::string message = error_of([&] { evaluate_object_files(dir / "scene.json", dir / "objects.json"); });
+  EXPECT_NE(message.find("scene.json"), std::string::npos) << message;
+  EXPECT_NE(message.find("key 'instance_id' not found"), std::string::npos) << message;
+  EXPECT_EQ(message.find("json.exception"), std::string::npos) << message;
+}
+
 TEST(EvalHardening, LabelOutsideTheClassIdRangeIsNamedNotClamped) {
   test::TempDir dir;
   auto ply = [&](const std::string& name, const std::string& label) {
