@@ -75,7 +75,8 @@ std::string manifest_json(const fs::path& dir) {
 /// Staged and published through io/output_folder: a `viewer` symlink planted in DIR is
 /// refused, never written through.
 fs::path write_viewer(const fs::path& dir) {
-  if (!fs::is_directory(dir)) throw Error(dir, "output folder is " + describe_path(dir));
+  if (!fs::is_directory(dir))
+    throw Error(dir, "is " + describe_path(dir) + ", expected the output folder of `semap run` (holding mesh.ply)");
   if (!is_regular_file_path(dir / "mesh.ply")) {
     throw Error(dir / "mesh.ply", "missing: not a semap output folder (run `semap run` or `semap demo` first)");
   }

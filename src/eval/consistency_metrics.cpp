@@ -95,7 +95,7 @@ SemanticConsistency evaluate_consistency(const TriangleMesh& mesh, const Traject
 SemanticConsistency evaluate_consistency_folder(const std::filesystem::path& out_dir, const ConsistencyOptions& options) {
   std::error_code ec;
   if (!std::filesystem::is_directory(out_dir, ec))
-    throw Error(out_dir, "output folder is " + describe_path(out_dir) + ", expected a semap run's output folder");
+    throw Error(out_dir, "is " + describe_path(out_dir) + ", expected a semap run's output folder");
   const std::filesystem::path mesh_path = out_dir / "mesh.ply";
   require_regular_file(mesh_path, "mesh");
   const TriangleMesh mesh = read_ply(mesh_path);

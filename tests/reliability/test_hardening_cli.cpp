@@ -163,6 +163,10 @@ TEST_F(HardeningCli, PlantedSymlinksCannotRedirectWritesOutsideOut) {
   expect_one_line_error(v2, {"index.html", "not written by semap"});
   EXPECT_TRUE(fs::is_symlink(out / "viewer" / "index.html"));
   EXPECT_EQ(slurp(outside / "index.victim"), "victim");
+  // A file where the output folder is expected says what it is and what was expected (it said
+  // "output folder is a regular file").
+  const auto v3 = run_semap({"view", (out / "mesh.ply").string(), "--no-serve"});
+  expect_one_line_error(v3, {"mesh.ply", "is a regular file, expected the output folder of `semap run`"});
 
   // `semap segment`: output names planted as symlinks are never followed nor replaced (issue 44).
   const fs::path seg = path("planted_segment");
