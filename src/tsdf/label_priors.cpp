@@ -176,10 +176,8 @@ std::vector<int> smooth_segments(const TriangleMesh& mesh, const Geometry& g, do
                               kMinSegmentVertices);
 }
 
-/// The segments' rule (file comment) on the vertices still unlabelled: `fits(v, class)` says
-/// whether the class fits vertex v's surface. Returns how many it labelled.
-template <typename Fits>
-size_t fill_from_segments(TriangleMesh& mesh, const Geometry& g, const TsdfConfig& c, const Fits& fits) {
+/// The segments' rule (file comment) on the vertices still unlabelled. Returns how many it labelled.
+size_t fill_from_segments(TriangleMesh& mesh, const Geometry& g, const TsdfConfig& c) {
   auto& labels = mesh.vertices.labels;
   const size_t nv = labels.size();
   const std::vector<int> segment = smooth_segments(mesh, g, c.label_prior_segment_k);
@@ -205,12 +203,14 @@ size_t fill_from_segments(TriangleMesh& mesh, const Geometry& g, const TsdfConfi
       if (labels[v] != 0 && labels[v] < kNumClasses) area[labels[v]] += vertex_area[v], labelled += vertex_area[v];
     }
     const ClassId best = static_cast<ClassId>(std::max_element(area.begin(), area.end()) - area.begin());
-    if (best == 0 || labelled < c.label_prior_segment_min_labelled * total ||
+    // Wall, floor and ceiling are decided by the planar regions above, not spread along smooth
+    // segments (a counter front the network half calls wall would become a wall).
+    if (best == 0 || is_structural(best) || labelled < c.label_prior_segment_min_labelled * total ||
         area[best] < c.label_prior_region_min_share * labelled)
       continue;
     for (uint32_t k = first[s]; k < first[s + 1]; ++k) {
       const uint32_t v = members[k];
-      if (labels[v] != 0 || !fits(v, best)) continue;
+      if (labels[v] != 0) continue;
       labels[v] = best;
       ++filled;
     }
@@ -293,11 +293,7 @@ LabelPriorStats apply_label_priors(TriangleMesh& mesh, const GravityEstimate& gr
     labels[v] = evidence.label_excluding(v, ruled_out);
     stats.refitted += labels[v] != 0;
   }
-  if (c.label_prior_segments)
-    stats.segment_filled = fill_from_segments(mesh, g, c, [&](uint32_t v, ClassId cls) {
-      const Facing f = facing(g.vertex_normal[v], up, cos_tilt, sin_tilt);
-      return rules.fits(cls, f, height_of(mesh.vertices.points[v].cast<double>()));
-    });
+  if (c.label_prior_segments) stats.segment_filled = fill_from_segments(mesh, g, c);
   return stats;
 }
 

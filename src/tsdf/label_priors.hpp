@@ -30,10 +30,11 @@
 //    Huttenlocher over vertex edges weighted 1 - n_u.n_v, K = segment_k, at least 20 vertices,
 //    as ScanNet segments its meshes for labelling). In a segment whose labelled area is at least
 //    segment_min_labelled of its area and whose largest class holds region_min_share of that,
-//    the class labels the vertices still unlabelled where it fits their surface (normal and
-//    height rules). Parts the network saw too rarely or too uncertainly for the per-voxel
-//    thresholds take the class of the surface they belong to; a segment boundary (an edge, a
-//    corner, a change of curvature) stops it, as labels in a person's annotation stop there.
+//    the class labels the vertices still unlabelled, unless it is wall, floor or ceiling: those
+//    are decided by the planar regions (a counter front the network half calls wall would
+//    otherwise become a wall). Parts of things the network saw too rarely or too uncertainly for
+//    the per-voxel thresholds take the class of the surface they belong to; a segment boundary
+//    (an edge, a corner, a change of curvature) stops it, as labels in a person's annotation do.
 #include <cstddef>
 
 #include "semap/core/gravity.hpp"
