@@ -31,9 +31,7 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 }
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  const std::string bytes = semap::fuzz::with_map_checksum(data, size);
-  const auto path = semap::fuzz::scratch_dir() / "map.semap";
-  semap::fuzz::write_bytes(path, bytes);
+  const auto path = semap::fuzz::map_input_file(data, size);
   try {
     semap::load_map(path);
   } catch (const semap::Error&) {

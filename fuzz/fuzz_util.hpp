@@ -54,11 +54,11 @@ inline std::string read_bytes(const std::filesystem::path& p) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
-/// A map.semap input with its checksum (core/archive.hpp: FNV-1a 64 of the bytes after the
-/// 12-byte head) appended as write_map_archive does, so that the fuzzer reaches the section table
-/// and the sections instead of stopping at the checksum; every 64th input is left as it is (the
-/// checksum and truncation paths).
-inline std::string with_map_checksum(const uint8_t* data, size_t size) {
+/// A map.semap input written to scratch_dir()/map.semap with its checksum (core/archive.hpp:
+/// FNV-1a 64 of the bytes after the 12-byte head) appended as write_map_archive does, so that the
+/// fuzzer reaches the section table and the sections instead of stopping at the checksum; every
+/// 64th input is written as it is (the checksum and truncation paths). Returns the path.
+inline std::filesystem::path map_input_file(const uint8_t* data, size_t size) {
   const auto fnv1a = [](const uint8_t* p, size_t n) {
     uint64_t h = 1469598103934665603ULL;
     for (size_t i = 0; i < n; ++i) {
@@ -72,7 +72,7 @@ inline std::string with_map_checksum(const uint8_t* data, size_t size) {
     const uint64_t sum = fnv1a(data + 12, size - 12);
     bytes.append(reinterpret_cast<const char*>(&sum), sizeof sum);
   }
-  return bytes;
+  return input_file("map.semap", reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size());
 }
 
 }  // namespace semap::fuzz
