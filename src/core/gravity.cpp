@@ -98,29 +98,6 @@ std::optional<Eigen::Vector3d> floor_label_up(const std::vector<Surface>& surfac
   return sum.normalized();
 }
 
-/// Up from the floor labels alone when the cameras' prior contradicts them: the labelled floor's
-/// dominant normal (floor_label_up, then refined by the floor triangles within the cone), taken
-/// when at least twice as much floor-labelled area faces it (within floor_normal_deg) as faces
-/// the prior. The level-x-axes prior assumes the camera turns about the vertical; one held
-/// pitched down that pans about its own y axis (TUM fr1_rpy: 50 deg off) breaks it, and the
-/// network's floor labels then lie far outside the refinement cone. nullopt: keep the prior.
-std::optional<Eigen::Vector3d> floor_labels_over_prior(const std::vector<Surface>& surfaces, const Eigen::Vector3d& centre,
-                                                       const Eigen::Vector3d& prior, const GravityOptions& o) {
-  std::optional<Eigen::Vector3d> up = floor_label_up(surfaces, centre, o.min_refine_area_m2);
-  if (!up) return std::nullopt;
-  for (int i = 0; i < o.refine_iterations; ++i) {
-    double area = 0.0;
-    const Eigen::Vector3d sum = agreeing_normal_sum(surfaces, *up, cos_deg(o.prior_cone_deg), true, area);
-    if (area < o.min_refine_area_m2 || sum.norm() < 1e-12) break;
-    *up = sum.dot(*up) < 0 ? Eigen::Vector3d(-sum.normalized()) : sum.normalized();
-  }
-  double area_up = 0.0, area_prior = 0.0;
-  agreeing_normal_sum(surfaces, *up, cos_deg(o.floor_normal_deg), true, area_up);
-  agreeing_normal_sum(surfaces, prior, cos_deg(o.floor_normal_deg), true, area_prior);
-  if (area_up < o.min_floor_area_m2 || area_up < 2.0 * area_prior) return std::nullopt;
-  return up;
-}
-
 /// Refines `up` by the near-horizontal triangles (floor-labelled ones first); returns whether
 /// any refinement happened and whether the last one used the floor labels.
 std::pair<bool, bool> refine_up(const std::vector<Surface>& surfaces, Eigen::Vector3d& up, const GravityOptions& o) {
@@ -136,6 +113,24 @@ std::pair<bool, bool> refine_up(const std::vector<Surface>& surfaces, Eigen::Vec
     refined = true;
   }
   return {refined, by_floor};
+}
+
+/// Up from the floor labels alone when the cameras' prior contradicts them: the labelled floor's
+/// dominant normal (floor_label_up, then refined as any prior is: refine_up), taken
+/// when at least twice as much floor-labelled area faces it (within floor_normal_deg) as faces
+/// the prior. The level-x-axes prior assumes the camera turns about the vertical; one held
+/// pitched down that pans about its own y axis (TUM fr1_rpy: 50 deg off) breaks it, and the
+/// network's floor labels then lie far outside the refinement cone. nullopt: keep the prior.
+std::optional<Eigen::Vector3d> floor_labels_over_prior(const std::vector<Surface>& surfaces, const Eigen::Vector3d& centre,
+                                                       const Eigen::Vector3d& prior, const GravityOptions& o) {
+  std::optional<Eigen::Vector3d> up = floor_label_up(surfaces, centre, o.min_refine_area_m2);
+  if (!up) return std::nullopt;
+  refine_up(surfaces, *up, o);
+  double area_up = 0.0, area_prior = 0.0;
+  agreeing_normal_sum(surfaces, *up, cos_deg(o.floor_normal_deg), true, area_up);
+  agreeing_normal_sum(surfaces, prior, cos_deg(o.floor_normal_deg), true, area_prior);
+  if (area_up < o.min_floor_area_m2 || area_up < 2.0 * area_prior) return std::nullopt;
+  return up;
 }
 
 /// The lowest large near-horizontal surface below `reference_height` (see the header).
