@@ -87,14 +87,7 @@ TEST_F(ObjectViewsTest, SavedMapKeepsEveryViewAndOlderMapsStillLoad) {
   config.pipeline.threads = 1;
   config.tsdf.voxel_size = 0.04;
   Mapper mapper(config, dataset->camera());
-  for (size_t i = 0; i < 30; ++i) {
-    const Frame frame = dataset->load(i);
-    FrameHints hints;
-    hints.T_world_camera = frame.gt_T_world_camera;
-    hints.segmentation = segmentation_from_label_images(frame.labels, frame.instances);
-    mapper.add_frame(frame, hints);
-  }
-  mapper.finish();
+  test::map_with_ground_truth_hints(mapper, *dataset, 30);
   const Views views = views_of(mapper.objects());
   ASSERT_GE(views.size(), 3u);
   mapper.save(tmp_ / "a.semap");

@@ -171,14 +171,7 @@ TEST_F(PipelineTest, ReportSaysWhyAFigureIsMissing) {
 TEST_F(PipelineTest, LibraryMapperReportsGivenPosesAndObjectViews) {
   const auto dataset = open_dataset(data());
   Mapper mapper(one_thread_config(), dataset->camera());
-  for (size_t i = 0; i < 40; ++i) {
-    const Frame frame = dataset->load(i);
-    FrameHints hints;
-    hints.T_world_camera = frame.gt_T_world_camera;
-    hints.segmentation = segmentation_from_label_images(frame.labels, frame.instances);
-    mapper.add_frame(frame, hints);
-  }
-  mapper.finish();
+  test::map_with_ground_truth_hints(mapper, *dataset, 40);
   write_map_outputs(mapper, out("library_given"));
   const nlohmann::json report = nlohmann::json::parse(slurp(out("library_given") / "report.json"));
   EXPECT_EQ(report["summary"]["poses"], "given");
