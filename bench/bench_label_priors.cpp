@@ -5,10 +5,13 @@
 // Also says why the unlabelled area is unlabelled: the voxel at each unlabelled vertex was never
 // labelled, or its argmax is below tsdf.mesh_min_label_probability, or it does not lead the
 // runner-up by tsdf.mesh_min_label_frames frames' votes (area shares of the mesh).
+// SEMAP_BENCH_MESH_DIR=DIR also writes each variant's mesh there (DIR/MAP_FRAMES_VARIANT.ply), to look at.
 #include <cstdio>
+#include <cstdlib>
 #include <nlohmann/json.hpp>
 
 #include "semap/eval/consistency_metrics.hpp"
+#include "semap/io/ply_io.hpp"
 #include "semap/mapper.hpp"
 #include "tsdf/label_priors.hpp"
 #include "tsdf/map_io.hpp"
@@ -114,6 +117,9 @@ int main(int argc, char** argv) {
         j["regions"] = s.regions;
         j["region_area_share"] = s.region_area_m2 / evaluate_consistency(raw, trajectory).mesh_area_m2;
         std::printf("%s\n", j.dump().c_str());
+        if (const char* mesh_dir = std::getenv("SEMAP_BENCH_MESH_DIR"))  // for looking at a variant
+          write_ply(std::filesystem::path(mesh_dir) / (dir.filename().string() + "_" + std::to_string(th.frames) + "_" +
+                                                       v.name + ".ply"), mesh);
       }
     }
   }

@@ -171,6 +171,37 @@ std::optional<double> floor_height(const std::vector<Surface>& surfaces, const E
   return std::nullopt;  // no height holds the share: no dominant floor
 }
 
+/// The floor plane's normal: an area-weighted least-squares plane through the centroids of the
+/// near-horizontal triangles within floor_plane_band_m of the floor height (floor, rug, anything
+/// lying on it), its normal turned to agree with `up`. nullopt when they cover less than
+/// min_floor_area_m2 or do not span floor_plane_min_extent_m in both directions (a strip of
+/// floor leaves the tilt about its axis undetermined).
+std::optional<Eigen::Vector3d> floor_plane_normal(const std::vector<Surface>& surfaces, const Eigen::Vector3d& up,
+                                                  double floor_height_m, const GravityOptions& o) {
+  const double min_cos = cos_deg(o.floor_normal_deg);
+  double area = 0.0;
+  Eigen::Vector3d weighted_sum = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d weighted_outer = Eigen::Matrix3d::Zero();
+  for (const Surface& s : surfaces) {
+    const Eigen::Vector3d& c = s.geometry.centroid;
+    if (std::abs(s.geometry.normal.dot(up)) < min_cos || std::abs(up.dot(c) - floor_height_m) > o.floor_plane_band_m)
+      continue;
+    area += s.geometry.area_m2;
+    weighted_sum += s.geometry.area_m2 * c;
+    weighted_outer += s.geometry.area_m2 * c * c.transpose();
+  }
+  if (area < o.min_floor_area_m2) return std::nullopt;
+  const Eigen::Vector3d mean = weighted_sum / area;
+  const Eigen::Matrix3d covariance = weighted_outer / area - mean * mean.transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
+  // A uniform extent L has variance L^2 / 12.
+  const double min_variance = o.floor_plane_min_extent_m * o.floor_plane_min_extent_m / 12.0;
+  if (eigen.info() != Eigen::Success || eigen.eigenvalues()(1) < min_variance) return std::nullopt;
+  const Eigen::Vector3d normal = eigen.eigenvectors().col(0);
+  if (std::abs(normal.dot(up)) < min_cos) return std::nullopt;
+  return normal.dot(up) < 0 ? Eigen::Vector3d(-normal) : normal;
+}
+
 Pose gravity_frame(const Eigen::Vector3d& up, const Eigen::Vector3d& origin) {
   Eigen::Vector3d x = Eigen::Vector3d::UnitX() - up.x() * up;
   if (x.norm() < 0.1) x = Eigen::Vector3d::UnitY() - up.y() * up;
@@ -254,9 +285,7 @@ GravityEstimate estimate_gravity(const TriangleMesh& mesh, const Trajectory& tra
     const auto [refined, by_floor] = refine_up(surfaces, up, options);
     if (trajectory_prior && refined)
       e.method = by_floor ? GravityMethod::kTrajectoryFloorLabels : GravityMethod::kTrajectoryHorizontal;
-    e.prior_to_up_deg = std::acos(std::clamp(prior->dot(up), -1.0, 1.0)) * 180.0 / std::numbers::pi;
   }
-  e.up_W = up;
 
   // Floor candidates lie below the cameras (the ceiling is above them).
   double reference_height = centre ? up.dot(*centre) : 0.0;
@@ -268,7 +297,19 @@ GravityEstimate estimate_gravity(const TriangleMesh& mesh, const Trajectory& tra
   if (const auto h = floor_height(surfaces, up, reference_height, options)) {
     e.floor_found = true;
     e.floor_height_m = *h;
+    // Gravity is perpendicular to the floor: its plane refines up (the horizontal surfaces'
+    // mean normal mixes in table tops, which a drifting map tilts against the floor). Not
+    // without a prior: +z's "floor" may be a wall.
+    for (int i = 0; prior && i < options.refine_iterations; ++i) {
+      const auto normal = floor_plane_normal(surfaces, up, e.floor_height_m, options);
+      if (!normal) break;
+      up = *normal;
+      e.up_from_floor_plane = true;
+      if (const auto refined_h = floor_height(surfaces, up, reference_height, options)) e.floor_height_m = *refined_h;
+    }
   }
+  e.up_W = up;
+  if (prior) e.prior_to_up_deg = std::acos(std::clamp(prior->dot(up), -1.0, 1.0)) * 180.0 / std::numbers::pi;
 
   Eigen::Vector3d origin = centre.value_or(Eigen::Vector3d::Zero());
   if (!centre && !trajectory.empty()) {

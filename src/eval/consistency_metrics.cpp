@@ -112,7 +112,8 @@ nlohmann::json to_json(const GravityEstimate& g) {
           {"method", std::string(enum_name(kGravityMethodNames, g.method))},
           {"floor_found", g.floor_found},
           {"floor_height_m", g.floor_found ? nlohmann::json(g.floor_height_m) : nlohmann::json(nullptr)},
-          {"prior_to_up_deg", g.prior_to_up_deg}};
+          {"prior_to_up_deg", g.prior_to_up_deg},
+          {"up_from_floor_plane", g.up_from_floor_plane}};
 }
 
 nlohmann::json to_json(const SemanticConsistency& c) {
