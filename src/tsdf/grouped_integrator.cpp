@@ -242,7 +242,7 @@ class GroupedIntegrator final : public ArenaIntegrator {
     const size_t* offsets;  ///< block k's runs: [offsets[k], offsets[k + 1])
     const RayInfo* rays;
     const Group* groups;
-    float label_band;
+    const float* label_bands;  ///< per ray: FrameSetup::label_band at its group's depth
     bool labels, colour, observation;
   };
 
@@ -256,6 +256,7 @@ class GroupedIntegrator final : public ArenaIntegrator {
     // where it is read: labelled groups with the Bayes layer).
     groups_.resize(heads.size());
     ray_info_.resize(heads.size());
+    label_bands_.resize(heads.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, heads.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t k = r.begin(); k < r.end(); ++k) summarise_group(f, want_observation, k);
     });
@@ -311,7 +312,7 @@ class GroupedIntegrator final : public ArenaIntegrator {
                          offsets_.data(),
                          ray_info_.data(),
                          groups_.data(),
-                         f.label_band,
+                         label_bands_.data(),
                          f.labels && (map.has_label_layer() || map.has_bayes_layer()),
                          f.colour && map.has_colour_layer(),
                          want_observation};
@@ -459,6 +460,7 @@ class GroupedIntegrator final : public ArenaIntegrator {
       g.observation = ClassDistribution::from_label(g.label, c, f.confusion_classes);
     }
     ray_info_[k] = RayInfo{frame_.heads[k].total_weight, g.colour, g.label};
+    label_bands_[k] = f.label_band(f.R_cw.row(2).dot(g.point - f.t_wc));
   }
 
   /// B6 for the updates of block k in ray order, then one label observation per voxel, from the
@@ -475,8 +477,10 @@ class GroupedIntegrator final : public ArenaIntegrator {
       for (const BlockUpdate& u : std::span(p.runs[r].first, p.runs[r].count)) {
         const RayInfo& ray = p.rays[u.group];
         const int li = u.li;
-        if (!p.updater.update<kNativeHalf>(block, li, u.d, ray.weight, 0, nullptr, p.colour ? &ray.colour : nullptr)) continue;
-        if (p.labels && ray.label != 0 && std::fabs(u.d) <= p.label_band && (best_group[li] < 0 || std::fabs(u.d) < best_d[li])) {
+        if (!p.updater.update<kNativeHalf>(block, li, u.d, ray.weight, 0, 0.0f, nullptr, p.colour ? &ray.colour : nullptr))
+          continue;
+        if (p.labels && ray.label != 0 && std::fabs(u.d) <= p.label_bands[u.group] &&
+            (best_group[li] < 0 || std::fabs(u.d) < best_d[li])) {
           best_group[li] = u.group;
           best_d[li] = std::fabs(u.d);
         }
@@ -526,6 +530,7 @@ class GroupedIntegrator final : public ArenaIntegrator {
   std::vector<size_t> offsets_, cursors_;
   std::vector<RunRef> block_runs_;
   std::vector<RayInfo> ray_info_;
+  std::vector<float> label_bands_;  ///< per group: its label band (FrameSetup::label_band)
 };
 
 }  // namespace

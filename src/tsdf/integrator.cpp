@@ -48,7 +48,9 @@ FrameSetup setup_frame(const TsdfMap& map, const IntegrationInput& in) {
   f.s = map.voxel_size();
   f.delta = static_cast<float>(cfg.truncation());
   f.eps = static_cast<float>(cfg.epsilon());
-  f.label_band = static_cast<float>(cfg.label_band_voxels * cfg.voxel_size);
+  f.label_band_min = static_cast<float>(cfg.label_band_voxels * cfg.voxel_size);
+  f.label_band_sigmas = static_cast<float>(cfg.label_band_sigmas);
+  f.depth_noise = cfg.depth_noise;
   f.min_range = static_cast<float>(cfg.min_depth);
   f.max_range = static_cast<float>(cfg.max_depth);
   f.default_confidence = static_cast<float>(cfg.bayes_default_confidence);
@@ -65,8 +67,7 @@ FrameSetup setup_frame(const TsdfMap& map, const IntegrationInput& in) {
 }
 
 VoxelUpdater make_updater(const TsdfMap& map, const FrameSetup& f) {
-  return VoxelUpdater{map.weights(),        map.bayes(),           f.delta,
-                      f.eps,                f.label_band,          static_cast<float>(map.config().weight_max),
+  return VoxelUpdater{map.weights(),         map.bayes(),           f.delta, f.eps, static_cast<float>(map.config().weight_max),
                       map.has_label_layer(), map.has_bayes_layer(), map.has_colour_layer()};
 }
 

@@ -35,10 +35,18 @@ struct FrameSetup {
   Eigen::Vector3f t_wc;  // camera centre in the world
   Eigen::Matrix3f R_cw;
   Eigen::Vector3f t_cw;
-  float s, delta, eps, label_band, min_range, max_range, default_confidence;
+  float s, delta, eps, min_range, max_range, default_confidence;
+  float label_band_min, label_band_sigmas;
+  DepthNoiseModel depth_noise;
   int confusion_classes = kNumRealClasses - 1;
   bool labels = false, confidence = false, probabilities = false, colour = false;
   int prob_channels = 0;
+
+  /// Labels update the voxels within this of depth z's surface (|d| <= band): label_band_voxels
+  /// voxels, widened to label_band_sigmas depth-noise sigmas, at most the truncation.
+  float label_band(float z) const {
+    return std::min(delta, std::max(label_band_min, label_band_sigmas * static_cast<float>(depth_noise.sigma_m(z))));
+  }
 };
 
 FrameSetup setup_frame(const TsdfMap& map, const IntegrationInput& in);
@@ -47,16 +55,16 @@ FrameSetup setup_frame(const TsdfMap& map, const IntegrationInput& in);
 struct VoxelUpdater {
   const WeightQuantizer& wq;
   const BayesLayerCodec& bayes;
-  float delta, eps, label_band, w_max;
+  float delta, eps, w_max;
   bool label_layer, bayes_layer, colour_layer;
 
-  /// d: signed distance (positive in front), w: ray weight before the drop-off.
-  /// Returns false when nothing was updated (beyond -delta).
+  /// d: signed distance (positive in front), w: ray weight before the drop-off; labels update
+  /// within label_band (FrameSetup::label_band). Returns false when nothing was updated (beyond -delta).
   /// Inlined into the voxel loops (measured: a call per update cost ~5 % of a projective frame).
   /// kNativeHalf: binary16 by the compiler's _Float16 (F16C instructions in a function built
   /// for them), the same IEEE round-to-nearest-even values as the hand-rolled conversions.
   template <bool kNativeHalf = false>
-  [[gnu::always_inline]] bool update(Block& block, int li, float d, float w, ClassId label,
+  [[gnu::always_inline]] bool update(Block& block, int li, float d, float w, ClassId label, float label_band,
                                      const ClassDistribution* observation, const Rgb8* colour) const {
     if (d <= -delta) return false;
     if (d < -eps) w *= (delta + d) / (delta - eps);  // B6 linear drop-off behind the surface

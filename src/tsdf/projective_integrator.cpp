@@ -248,7 +248,8 @@ template <bool kNativeHalf>
         obs = &p.label_observations[label];
       }
     }
-    n += p.updater.update<kNativeHalf>(block, li, sdf, 1.0f / (depth * depth), label, obs, p.colour ? &sample.rgb : nullptr);
+    n += p.updater.update<kNativeHalf>(block, li, sdf, 1.0f / (depth * depth), label, label != 0 ? f.label_band(depth) : 0.0f,
+                                       obs, p.colour ? &sample.rgb : nullptr);
   }
   return n;
 }
