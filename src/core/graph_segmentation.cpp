@@ -28,7 +28,7 @@ struct DisjointSets {
 
 }  // namespace
 
-std::vector<int> felzenszwalb_cluster(int num_nodes, std::vector<WeightedEdge> edges, float k, int min_size) {
+std::vector<int> felzenszwalb_cluster(int num_nodes, std::vector<WeightedEdge> edges, float k) {
   std::stable_sort(edges.begin(), edges.end(),
                    [](const WeightedEdge& x, const WeightedEdge& y) { return x.weight < y.weight; });
   DisjointSets sets(num_nodes);
@@ -39,11 +39,6 @@ std::vector<int> felzenszwalb_cluster(int num_nodes, std::vector<WeightedEdge> e
                                      sets.internal[b] + k / static_cast<float>(sets.size[b]));
     if (e.weight <= threshold) sets.unite(a, b, e.weight);
   }
-  if (min_size > 1)
-    for (const auto& e : edges) {
-      const int a = sets.find(e.a), b = sets.find(e.b);
-      if (a != b && (sets.size[a] < min_size || sets.size[b] < min_size)) sets.unite(a, b, e.weight);
-    }
   std::vector<int> component(num_nodes, -1), remap(num_nodes, -1);
   int next = 0;
   for (int i = 0; i < num_nodes; ++i) {

@@ -12,9 +12,9 @@ struct WeightedEdge {
 };
 
 /// Merges along increasing weight while w <= min(Int(C1) + k/|C1|, Int(C2) + k/|C2|) (Int: the
-/// largest weight of a component's spanning tree). Then, as the paper's post-processing, the
-/// edges in the same order join any component smaller than `min_size` nodes to its neighbour
-/// (1: none). Returns a component id (0..C-1) per node, numbered in node order.
-std::vector<int> felzenszwalb_cluster(int num_nodes, std::vector<WeightedEdge> edges, float k, int min_size = 1);
+/// largest weight of a component's spanning tree). Returns a component id (0..C-1) per node,
+/// numbered in node order. (The paper's joining of small components is left out: it ignores the
+/// weights; tsdf/label_priors measured it carrying labels across objects.)
+std::vector<int> felzenszwalb_cluster(int num_nodes, std::vector<WeightedEdge> edges, float k);
 
 }  // namespace semap

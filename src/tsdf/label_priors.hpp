@@ -27,8 +27,9 @@
 //    the geometry, decided by the same thresholds as every label. A horizontal counter that the
 //    network calls wall about as often as cabinet becomes cabinet, not unlabelled.
 //  - segments: the mesh is cut into smooth segments where its normal turns (Felzenszwalb-
-//    Huttenlocher over vertex edges weighted 1 - n_u.n_v, K = segment_k, at least 20 vertices,
-//    as ScanNet segments its meshes for labelling). In a segment whose labelled area is at least
+//    Huttenlocher over vertex edges weighted 1 - n_u.n_v, K = segment_k, as ScanNet segments its
+//    meshes for labelling, without its joining of segments under 20 vertices,
+//    which carried labels across objects). In a segment whose labelled area is at least
 //    segment_min_labelled of its area and whose largest class holds region_min_share of that,
 //    the class labels the vertices still unlabelled, unless it is wall, floor or ceiling: those
 //    are decided by the planar regions (a counter front the network half calls wall would
