@@ -71,6 +71,7 @@ struct Tracker::Impl {
   bool velocity_valid = false;
   bool lost = false;
   int resumed_keyframes = 0;  ///< keyframes 0..n-1 came from a saved map (resume): fixed, relocalised into
+  std::shared_ptr<const ModelView> model;  ///< the fused model (set_model_view), or none
 
   // Written by the tracking thread, read by trajectory() / stats() from any thread.
   mutable std::mutex frames_mutex;
@@ -297,10 +298,30 @@ struct Tracker::Impl {
     loop.add_keyframe(id, parent, T_parent_this, parent >= 0 ? odometry.information(icp) : Matrix6d::Zero());
     keyframes.add(std::move(kf));
     reference = id;
-    ref_pyramid = std::move(in.pyramid);
-    complete_target_pyramid(ref_pyramid, true);
+    ref_pyramid = model_target(in, loop.pose(id));
+    if (ref_pyramid.empty()) {
+      ref_pyramid = std::move(in.pyramid);
+      complete_target_pyramid(ref_pyramid, true);
+    }
     keyframes.remember_target(id, ref_pyramid);
     loop.submit(id);
+  }
+
+  /// Frame-to-model (METHODS.md A2): the keyframe's ICP target pyramid from the model's surface
+  /// along its pixel rays, its own depth where the model has none; empty without a model (or
+  /// tracking.model_keyframes off). The map was fused with the poses of their time and the
+  /// graph's pose of the keyframe may have moved since (loop closure): the keyframe is first
+  /// registered to the model seen from that pose (not within the keyframe limits: no model), then
+  /// the model is taken from where the keyframe fits it.
+  std::vector<DepthLevel> model_target(const FrameInput& in, const Pose& T_world_keyframe) const {
+    if (!model || !cfg.model_keyframes) return {};
+    cv::Mat depth = model->surface_depth(in.depth, intr, T_world_keyframe);
+    const IcpResult icp = odometry.refine(in.pyramid, odometry.pyramid(depth, in.gray), Pose::Identity());
+    if (!odometry.icp_acceptable(icp, cfg.keyframe_max_icp_rmse, cfg.keyframe_min_overlap)) return {};
+    depth = model->surface_depth(in.depth, intr, T_world_keyframe * icp.T_target_source);
+    const cv::Mat unseen = depth <= 0;
+    in.depth.copyTo(depth, unseen);
+    return odometry.pyramid(depth, in.gray);
   }
 
   /// A registration to an older keyframe is a reference only when it would be kept as one
@@ -381,6 +402,8 @@ Tracker::Tracker(const TrackingConfig& config, const CameraModel& camera)
 Tracker::~Tracker() = default;
 
 TrackResult Tracker::track(const Frame& frame) { return impl_->track(frame); }
+
+void Tracker::set_model_view(std::shared_ptr<const ModelView> model) { impl_->model = std::move(model); }
 
 Trajectory Tracker::finish() {
   if (impl_->cfg.background_loop_closure) impl_->loop.wait_idle();
