@@ -29,6 +29,7 @@
 #include "tsdf/map_io.hpp"
 #include "tsdf/tsdf_interpolation.hpp"
 #include "tsdf/semantic_tsdf.hpp"
+#include "tsdf/tsdf_raycast.hpp"
 #include "tsdf/voxel_label.hpp"
 
 namespace semap {
@@ -47,6 +48,22 @@ struct TrackedFrame {
   std::optional<SegmentationResult> primary_result, semantic_result;  ///< arrived (nullopt: dropped or failed)
   bool map_objects = false;  ///< its segmentation also feeds the object map (C2-C4)
   bool held = false;         ///< no pose yet (see FrameLog::held)
+};
+
+/// The fused TSDF as the tracker sees it (frame-to-model, METHODS.md A2; issue 42): one
+/// read-only query, under the map's lock. Data flows one way: tracking never holds the map.
+class TsdfModelView final : public ModelView {
+ public:
+  TsdfModelView(const SemanticTsdf& tsdf, std::mutex& tsdf_mutex) : tsdf_(tsdf), mutex_(tsdf_mutex) {}
+  cv::Mat surface_depth(const cv::Mat& depth_m, const PinholeIntrinsics& intrinsics,
+                        const Pose& T_world_camera) const override {
+    std::lock_guard lock(mutex_);
+    return surface_depth_along_rays(tsdf_.map(), depth_m, intrinsics, T_world_camera);
+  }
+
+ private:
+  const SemanticTsdf& tsdf_;
+  std::mutex& mutex_;
 };
 
 /// What fusion hands to the object map.
@@ -152,6 +169,11 @@ struct Mapper::Impl {
   ArchiveSections sections() const;
   void restore(const ArchiveSections& sections, const std::filesystem::path& path);
   SemanticTsdf refresh_start() const;
+  /// The tracker, handed the fused map as its model view (frame-to-model, METHODS.md A2).
+  void make_tracker() {
+    tracker = std::make_unique<Tracker>(config.tracking, camera);
+    tracker->set_model_view(std::make_shared<TsdfModelView>(tsdf, tsdf_mutex));
+  }
   // --- finish ---
   Trajectory current_trajectory() const;
   void refresh_map(const Trajectory& optimised);
@@ -225,7 +247,7 @@ TrackedFrame Mapper::Impl::locate(const Frame& frame, const std::optional<Pose>&
     return item;
   }
   std::lock_guard lock(tracker_mutex);
-  if (!tracker) tracker = std::make_unique<Tracker>(config.tracking, camera);
+  if (!tracker) make_tracker();
   const TrackResult r = tracker->track(frame);
   item.held = r.status == TrackingStatus::lost && r.reference_keyframe < 0;
   result.tracking_ms = t0.wall_ms_since();
@@ -709,7 +731,7 @@ void Mapper::Impl::restore(const ArchiveSections& saved, const std::filesystem::
   objects_in_map = objects.instances().size();
   external_poses = saved.count(kTrackingSection) == 0;  // no keyframes: only given poses can continue it
   if (*external_poses) return;
-  tracker = std::make_unique<Tracker>(config.tracking, camera);
+  make_tracker();
   tracker->resume(decode_tracker_state(saved.at(kTrackingSection), path));
 }
 

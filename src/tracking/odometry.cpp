@@ -87,16 +87,30 @@ void Odometry::verify(OdometryResult& reg, const Evidence& ev) const {
   const VerificationParams& vp = cfg_.verify;
   reg.check = ev.feature_check;
   if (!vp.enabled || reg.icp.matched == 0) return;
+  const RegistrationCheck dense = dense_check(*ev.frame_pyramid, *ev.kf_pyramid, reg.icp.T_target_source);
   reg.check.evaluated = true;
-  const size_t level = size_t(std::min<int>(vp.residual_level, int(ev.frame_pyramid->size()) - 1));
-  const DenseResidual dense =
-      dense_depth_residual((*ev.frame_pyramid)[level], (*ev.kf_pyramid)[level], reg.icp.T_target_source, vp);
-  reg.check.consistent_fraction = dense.consistent_fraction();
-  reg.check.dense_overlap = dense.overlap_fraction();
-  reg.check.dense_points = dense.overlap;
-  reg.check.agreeing_share = dense.agreeing_share();
-  reg.check.dense_ok = reg.check.consistent_fraction >= vp.min_consistent_fraction &&
-                       reg.check.agreeing_share >= vp.min_agreeing_share;
+  reg.check.consistent_fraction = dense.consistent_fraction;
+  reg.check.dense_overlap = dense.dense_overlap;
+  reg.check.dense_points = dense.dense_points;
+  reg.check.agreeing_share = dense.agreeing_share;
+  reg.check.dense_ok = dense.dense_ok;
+}
+
+RegistrationCheck Odometry::dense_check(const std::vector<DepthLevel>& frame_pyramid,
+                                        const std::vector<DepthLevel>& ref_pyramid, const Pose& T_ref_frame) const {
+  const VerificationParams& vp = cfg_.verify;
+  RegistrationCheck check;
+  if (!vp.enabled || frame_pyramid.empty() || ref_pyramid.empty()) return check;
+  check.evaluated = true;
+  const int last = int(std::min(frame_pyramid.size(), ref_pyramid.size())) - 1;
+  const size_t level = size_t(std::min<int>(vp.residual_level, last));
+  const DenseResidual dense = dense_depth_residual(frame_pyramid[level], ref_pyramid[level], T_ref_frame, vp);
+  check.consistent_fraction = dense.consistent_fraction();
+  check.dense_overlap = dense.overlap_fraction();
+  check.dense_points = dense.overlap;
+  check.agreeing_share = dense.agreeing_share();
+  check.dense_ok = check.consistent_fraction >= vp.min_consistent_fraction && check.agreeing_share >= vp.min_agreeing_share;
+  return check;
 }
 
 /// Conditioning of the frame's geometry (issue 42), at the coarsest pyramid level (its normals

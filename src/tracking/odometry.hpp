@@ -69,6 +69,11 @@ class Odometry {
                    const Pose& T_target_source) const;
 
   bool icp_acceptable(const IcpResult& icp, double max_rmse, double min_overlap) const;
+  /// Dense depth residual check of `T_ref_frame` (issue 42): the frame's pyramid warped into the
+  /// reference's at tracking.verify.residual_level. Not evaluated (and passing) when
+  /// verification is off.
+  RegistrationCheck dense_check(const std::vector<DepthLevel>& frame_pyramid, const std::vector<DepthLevel>& ref_pyramid,
+                                const Pose& T_ref_frame) const;
   /// An estimate without trusted feature support must stay near the motion prior (A2).
   bool plausible(const Pose& prior, const Pose& T_ref_frame) const;
   /// Pose-graph information of an ICP result (A4).

@@ -18,6 +18,7 @@
 #include "semap/core/frame.hpp"
 #include "semap/core/pose.hpp"
 #include "semap/tracking/tracking_config.hpp"
+#include "tracking/model_view.hpp"
 #include "tracking/registration.hpp"
 #include "tracking/registration_check.hpp"
 
@@ -96,6 +97,10 @@ class Tracker {
   Tracker(const Tracker&) = delete;
   Tracker& operator=(const Tracker&) = delete;
 
+  /// The fused model the keyframe targets are taken from (tracking.model_keyframes; METHODS.md
+  /// A2 frame-to-model); nullptr: keyframes keep their own depth. Call before the first frame,
+  /// from the tracking thread.
+  void set_model_view(std::shared_ptr<const ModelView> model);
   /// Tracks one frame (frames in sequence order). Throws semap::Error for empty/mistyped images.
   TrackResult track(const Frame& frame);
   /// Waits for pending loop closure, runs the final pose-graph optimisation and returns the

@@ -224,6 +224,14 @@ struct TrackingConfig {
   int keyframe_min_inliers = 30;       ///< fewer RANSAC inliers make a new keyframe (features thinning out)
   bool keyframe_reuse = true;          ///< track against an older keyframe near the current pose instead of making a new one
   double keyframe_reuse_max_score = 0.8;  ///< max (dt/keyframe_translation + drot/keyframe_rotation) for reuse
+  /// Frame-to-model (METHODS.md A2, issue 42): a new keyframe's ICP target is the fused model's
+  /// surface along its pixel rays (its own depth where the model has none yet), when the
+  /// pipeline hands the tracker a model view (Tracker::set_model_view); the frames tracked
+  /// against it register to the model's projected point cloud instead of one depth image.
+  /// Off by default: on the shared sequences the fused surface disagrees with a new keyframe's
+  /// depth by ~2 cm (median) during fast rotation, and semap run measured worse with it
+  /// (fr1_rpy 1.46 -> 1.94 cm ATE, 2.03 -> 2.32 deg/s; redkitchen 3.17 -> 4.41 cm).
+  bool model_keyframes = false;
 
   // --- A3 random ferns ---
   FernParams ferns;
@@ -279,6 +287,7 @@ struct TrackingConfig {
     v.param("keyframe_min_inliers", keyframe_min_inliers, "", "fewer RANSAC inliers make a new keyframe", {0, 100000});
     v.param("keyframe_reuse", keyframe_reuse, "", "re-use an older keyframe near the current pose");
     v.param("keyframe_reuse_max_score", keyframe_reuse_max_score, "", "pose-distance score limit for re-use", non_negative(100.0));
+    v.param("model_keyframes", model_keyframes, "", "keyframe ICP targets from the fused model's surface (frame-to-model, A2) when the pipeline provides it");
     ferns.visit(v);
     v.param("fern_new_keyframe_similarity", fern_new_keyframe_similarity, "", "dissimilar frames become keyframes", fraction());
     v.param("loop_min_similarity", loop_min_similarity, "", "fern similarity of a loop candidate", fraction());
