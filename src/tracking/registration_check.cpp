@@ -7,15 +7,10 @@
 namespace semap {
 
 namespace {
-/// Depth of the sensor model's minimum noise (Nguyen et al. 2012, Kinect v1), metres.
-constexpr double kNoiseModelMinDepthM = 0.4;
 constexpr int kNeighbourhood[9][2] = {{0, 0}, {-1, 0}, {1, 0}, {0, -1}, {0, 1}, {-1, -1}, {1, -1}, {-1, 1}, {1, 1}};
 }  // namespace
 
-double depth_noise_sigma(double z_m, const VerificationParams& p) {
-  const double dz = std::max(0.0, z_m - kNoiseModelMinDepthM);
-  return p.depth_noise_base_m + p.depth_noise_quadratic * dz * dz;
-}
+double depth_noise_sigma(double z_m, const VerificationParams& p) { return p.depth_noise.sigma_m(z_m); }
 
 DenseResidual dense_depth_residual(const DepthLevel& frame, const DepthLevel& reference, const Pose& T_ref_frame,
                                    const VerificationParams& params) {

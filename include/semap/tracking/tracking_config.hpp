@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cstdint>
 
+#include "semap/core/depth_noise_model.hpp"
 #include "semap/core/params.hpp"
 
 namespace semap {
@@ -107,8 +108,7 @@ struct RansacParams {
 struct VerificationParams {
   bool enabled = true;                 ///< off: registrations are judged as before issue 42
   /// Dense depth residual: the frame's depth warped into the reference with the candidate pose.
-  double depth_noise_base_m = 0.0012;  ///< sigma(z) at 0.4 m, metres
-  double depth_noise_quadratic = 0.0019;  ///< sigma(z) growth, metres per metre^2 beyond 0.4 m
+  DepthNoiseModel depth_noise;         ///< the sensor's sigma(z)
   double residual_sigmas = 3.0;        ///< a warped point agrees within this many sigma(z) ...
   double residual_pose_tolerance_m = 0.01;  ///< ... plus this (the pose's own error, depth edges), metres
   int residual_level = 2;              ///< pyramid level the dense residual is computed at (2 = quarter resolution)
@@ -137,8 +137,7 @@ struct VerificationParams {
 
   void visit(ParamVisitor& v) {
     v.param("enabled", enabled, "", "verify each registration before trusting it (issue 42)");
-    v.param("depth_noise_base_m", depth_noise_base_m, "m", "depth noise sigma at 0.4 m (sensor model)", positive(1.0));
-    v.param("depth_noise_quadratic", depth_noise_quadratic, "1/m", "depth noise growth: sigma(z) = base + this * (z - 0.4)^2", non_negative(1.0));
+    depth_noise.visit(v);
     v.param("residual_sigmas", residual_sigmas, "", "dense residual bound in depth-noise sigmas", positive(100.0));
     v.param("residual_pose_tolerance_m", residual_pose_tolerance_m, "m", "dense residual bound added for the pose's own error", non_negative(1.0));
     v.param("residual_level", residual_level, "", "pyramid level of the dense residual (0 = full resolution)", {0, 4});
