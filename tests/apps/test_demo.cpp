@@ -58,9 +58,11 @@ TEST(Demo, FiguresOfTheReadmeHoldAndTheBayesianLayerBeatsTheCompactVote) {
   std::printf("[demo] ATE %.2f cm, mIoU %.3f (without label rules: Bayesian %.3f, compact vote %.3f), WOv %.3f "
               "(voxel-set %.3f), objects %d (gt %d)\n",
               ate_m * 100, miou, miou_fused, miou_compact, wov, wov_voxel, map_objects, gt_objects);
-  // README: mIoU 0.949 (0.943 Bayesian without the label rules, 0.863 compact).
+  // README: mIoU 0.949 (0.943 Bayesian without the label rules, 0.863 compact). Measured
+  // 2026-12-07: 0.949 (0.946 without the rules, 0.871 compact). 0.94 is issue 38's "nothing
+  // lost" bound; the smooth segments' small joins had cost 0.016 on the demo's mesh.
   EXPECT_LE(ate_m, kDemoMaxAteM);
-  EXPECT_GE(miou, 0.92);
+  EXPECT_GE(miou, 0.94);
   EXPECT_GE(miou, miou_fused - 0.005) << "the label rules must not cost accuracy on the demo";
   EXPECT_GE(miou_fused - miou_compact, 0.04) << "the default label rule was chosen by this margin";
   EXPECT_GE(wov, kDemoMinWov);
