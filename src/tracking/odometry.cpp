@@ -25,8 +25,12 @@ double keyframe_spacings(const Pose& relative, const TrackingConfig& c) {
 
 Odometry::Odometry(const TrackingConfig& config, const PinholeIntrinsics& intrinsics)
     : cfg_(config), intr_(intrinsics) {
-  orb_ = cv::ORB::create(cfg_.orb_features, float(cfg_.orb_scale_factor), cfg_.orb_levels, 19, 0, 2,
-                         cv::ORB::HARRIS_SCORE, 31, cfg_.orb_fast_threshold);
+  const auto make_orb = [&](int features) {
+    return cv::ORB::create(features, float(cfg_.orb_scale_factor), cfg_.orb_levels, 19, 0, 2, cv::ORB::HARRIS_SCORE,
+                           31, cfg_.orb_fast_threshold);
+  };
+  orb_ = make_orb(cfg_.orb_features);
+  wide_orb_ = make_orb(cfg_.orb_wide_features > 0 ? cfg_.orb_wide_features : cfg_.orb_features);
   icp_params_ = cfg_.icp;
   // Wide-baseline ICP (issue 16): twice the coarse iterations, the basin is at the coarse levels.
   wide_icp_params_ = cfg_.icp;
@@ -36,6 +40,10 @@ Odometry::Odometry(const TrackingConfig& config, const PinholeIntrinsics& intrin
 
 FrameFeatures Odometry::extract_features(const cv::Mat& gray, const cv::Mat& depth) {
   return semap::extract_features(*orb_, gray, depth, intr_, cfg_.min_depth, cfg_.max_depth);
+}
+
+FrameFeatures Odometry::extract_wide_features(const cv::Mat& gray, const cv::Mat& depth) {
+  return semap::extract_features(*wide_orb_, gray, depth, intr_, cfg_.min_depth, cfg_.max_depth);
 }
 
 std::vector<DepthLevel> Odometry::pyramid(const cv::Mat& depth, const cv::Mat& gray, bool source_only) const {

@@ -53,6 +53,9 @@ class Odometry {
 
   /// ORB keypoints with 3D points of a frame (A2 steps 1-2). Tracking thread only.
   FrameFeatures extract_features(const cv::Mat& gray, const cv::Mat& depth);
+  /// The denser set of the wide-baseline attempt (tracking.orb_wide_features; the per-frame
+  /// set's size when that is 0). Tracking thread only.
+  FrameFeatures extract_wide_features(const cv::Mat& gray, const cv::Mat& depth);
   /// ICP pyramid of a frame; `source_only` for a tracked frame (completed with
   /// complete_target_pyramid if it becomes a keyframe; METHODS.md A2 step 4).
   std::vector<DepthLevel> pyramid(const cv::Mat& depth, const cv::Mat& gray, bool source_only = false) const;
@@ -99,7 +102,7 @@ class Odometry {
 
   TrackingConfig cfg_;
   PinholeIntrinsics intr_;
-  cv::Ptr<cv::ORB> orb_;
+  cv::Ptr<cv::ORB> orb_, wide_orb_;
   IcpParams icp_params_, wide_icp_params_;
 };
 

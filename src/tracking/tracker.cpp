@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <mutex>
+#include <optional>
 #include <opencv2/imgproc.hpp>
 
 #include "semap/core/error.hpp"
@@ -51,6 +52,7 @@ struct FrameInput {
   FrameFeatures features;
   std::vector<DepthLevel> pyramid;  ///< source-only ICP pyramid
   FernCode code;                    ///< computed when first needed (fern_code)
+  std::optional<FrameFeatures> wide_features;  ///< the wide-baseline set, when first needed
 };
 }  // namespace
 
@@ -66,6 +68,7 @@ struct Tracker::Impl {
   // Per-frame state: the tracking thread (track(), resume()) only.
   int reference = -1;                 ///< keyframe the frames are registered against
   std::vector<DepthLevel> ref_pyramid;  ///< its completed ICP target pyramid
+  std::optional<FrameFeatures> ref_wide_features;  ///< its wide-baseline set, once extracted
   Pose T_ref_last = Pose::Identity();
   Pose velocity = Pose::Identity();  ///< T_{k-2}^{-1} T_{k-1}
   bool velocity_valid = false;
@@ -129,22 +132,57 @@ struct Tracker::Impl {
 
   Pose motion_prior() const { return velocity_valid && !lost ? T_ref_last * velocity : T_ref_last; }
 
-  /// Frame-to-reference registration from the motion prior, then with the wide-baseline effort
-  /// when that failed (issue 16: consecutive-frame speed stays as it was).
-  OdometryResult register_to_reference(const FrameInput& in, const Pose& prior, size_t frame_index,
-                                       TrackResult& result) const {
+  /// The keyframe the frames are registered against from now on, with its target pyramid and,
+  /// when the frame that became it had one, its wide-baseline feature set.
+  void set_reference(int id, std::vector<DepthLevel> pyramid, std::optional<FrameFeatures> wide = std::nullopt) {
+    reference = id;
+    ref_pyramid = std::move(pyramid);
+    ref_wide_features = std::move(wide);
+    keyframes.remember_target(id, ref_pyramid);
+  }
+
+  /// The wide-baseline feature sets (issue 42), extracted only when first needed: a wide
+  /// baseline leaves too few of the per-frame keypoints in common to register.
+  const FrameFeatures& wide_features(FrameInput& in) {
+    if (!in.wide_features) in.wide_features = odometry.extract_wide_features(in.gray, in.depth);
+    return *in.wide_features;
+  }
+  const FrameFeatures& reference_wide_features() {
+    if (!ref_wide_features) {
+      const std::shared_ptr<const Keyframe> ref_kf = keyframes.get(reference);
+      ref_wide_features = odometry.extract_wide_features(ref_kf->gray, ref_kf->depth);
+    }
+    return *ref_wide_features;
+  }
+
+  /// Frame-to-reference registration from the motion prior; when that failed, the wide-baseline
+  /// effort (more RANSAC samples, a wider ICP gate) with the per-frame features, then with the
+  /// denser sets (issue 16: consecutive-frame speed stays as it was; issue 42: keyframe-rate
+  /// baselines share too few of the per-frame keypoints). The first accepted one is kept.
+  OdometryResult register_to_reference(FrameInput& in, const Pose& prior, size_t frame_index, TrackResult& result) {
     const std::shared_ptr<const Keyframe> ref_kf = keyframes.get(reference);
     const uint32_t seed = uint32_t(cfg.seed) + uint32_t(frame_index);
     OdometryResult reg = odometry.register_to(in.features, in.pyramid, ref_kf->features, ref_pyramid, &prior, seed);
-    result.timings.ransac_ms = reg.ransac_ms;
-    result.timings.icp_ms = reg.icp_ms;
+    add_timings(reg, result);
     if (reg.accepted) return reg;
     const double step = velocity_valid && !lost ? pose_distance(Pose::Identity(), velocity) : 0.0;
+    const uint32_t wide_seed = seed * 2654435761u + 17u;
     OdometryResult wide = odometry.register_to(in.features, in.pyramid, ref_kf->features, ref_pyramid, &prior,
-                                               seed * 2654435761u + 17u, RegistrationEffort::wide, step);
-    result.timings.ransac_ms += wide.ransac_ms;
-    result.timings.icp_ms += wide.icp_ms;
-    return wide.accepted ? wide : reg;
+                                               wide_seed, RegistrationEffort::wide, step);
+    add_timings(wide, result);
+    if (wide.accepted || cfg.orb_wide_features <= 0) return wide.accepted ? wide : reg;
+    const auto t0 = Clock::now();
+    const FrameFeatures& frame_dense = wide_features(in);
+    const FrameFeatures& ref_dense = reference_wide_features();
+    result.timings.features_ms += ms_since(t0);
+    OdometryResult dense = odometry.register_to(frame_dense, in.pyramid, ref_dense, ref_pyramid, &prior, wide_seed,
+                                                RegistrationEffort::wide, step);
+    add_timings(dense, result);
+    return dense.accepted ? dense : reg;
+  }
+  static void add_timings(const OdometryResult& reg, TrackResult& result) {
+    result.timings.ransac_ms += reg.ransac_ms;
+    result.timings.icp_ms += reg.icp_ms;
   }
 
   void report_registration(const OdometryResult& reg, const Pose& prior, size_t frame_index, TrackResult& result) {
@@ -178,9 +216,7 @@ struct Tracker::Impl {
     auto found = keyframes.relocalise(in.features, in.pyramid, fern_code(in), reference, ref_pyramid);
     if (!found) return false;
     reg = std::move(found->registration);
-    reference = found->keyframe->id;
-    ref_pyramid = std::move(found->keyframe_pyramid);
-    keyframes.remember_target(reference, ref_pyramid);
+    set_reference(found->keyframe->id, std::move(found->keyframe_pyramid));
     velocity_valid = false;
     std::lock_guard<std::mutex> lock(frames_mutex);
     ++counters.relocalisations;
@@ -297,13 +333,12 @@ struct Tracker::Impl {
     const int id = kf->id;
     loop.add_keyframe(id, parent, T_parent_this, parent >= 0 ? odometry.information(icp) : Matrix6d::Zero());
     keyframes.add(std::move(kf));
-    reference = id;
-    ref_pyramid = model_target(in, loop.pose(id));
-    if (ref_pyramid.empty()) {
-      ref_pyramid = std::move(in.pyramid);
-      complete_target_pyramid(ref_pyramid, true);
+    std::vector<DepthLevel> target = model_target(in, loop.pose(id));
+    if (target.empty()) {
+      target = std::move(in.pyramid);
+      complete_target_pyramid(target, true);
     }
-    keyframes.remember_target(id, ref_pyramid);
+    set_reference(id, std::move(target), std::move(in.wide_features));
     loop.submit(id);
   }
 
@@ -372,9 +407,7 @@ struct Tracker::Impl {
       std::lock_guard<std::mutex> lock(frames_mutex);
       ++counters.keyframe_reuses;
     }
-    reference = best;
-    ref_pyramid = kf_pyramid;
-    keyframes.remember_target(best, ref_pyramid);
+    set_reference(best, kf_pyramid);
     T_ref_frame = icp.T_target_source;
     return true;
   }

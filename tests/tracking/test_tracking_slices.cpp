@@ -141,14 +141,17 @@ TEST(TrackingSlices, TumFr1RpyKeyframeRate) {
   EXPECT_LE(run.lost, run.frames / 3);
 }
 
-// redkitchen at keyframe rate loses most frames (wide baselines the registration does not
-// bridge yet: issue 42 open); what holds is that none of the poses it verifies is wrong.
-TEST(TrackingSlices, RedkitchenKeyframeRateVerifiesNoWrongPose) {
+// redkitchen at keyframe rate: 15 frames, 25 cm and up to 20 deg apart (the overlap of
+// consecutive ones 0.47-0.89 by the ground truth). With the per-frame 700 ORB keypoints alone
+// the wide baselines shared too few matches: 11 of 15 lost, ATE 56.7 cm; with the dense
+// wide-baseline set (tracking.orb_wide_features) measured 2 lost, ATE 11.4 cm, none wrong.
+TEST(TrackingSlices, RedkitchenKeyframeRate) {
   SEMAP_REQUIRE_DATA(dir, "7scenes_redkitchen");
   const KeyframeRateRun run = run_keyframe_rate(dir);
   ASSERT_GE(run.frames, 10u);
   EXPECT_EQ(run.wrong_verified, 0u);
-  EXPECT_LT(run.lost, run.frames - 1);  // at least one frame after the first is tracked
+  EXPECT_LE(run.lost, run.frames / 4);
+  EXPECT_LE(run.ate_rmse_m, 0.15);
 }
 
 // 20 frames of all-zero depth and black colour mid-sequence: every one is lost (never a pose
