@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "semap/core/error.hpp"
 #include "tracking/pose_graph.hpp"  // information_from_icp
 
 namespace semap {
@@ -30,7 +31,7 @@ Odometry::Odometry(const TrackingConfig& config, const PinholeIntrinsics& intrin
                            31, cfg_.orb_fast_threshold);
   };
   orb_ = make_orb(cfg_.orb_features);
-  wide_orb_ = make_orb(cfg_.orb_wide_features > 0 ? cfg_.orb_wide_features : cfg_.orb_features);
+  if (cfg_.orb_wide_features > 0) wide_orb_ = make_orb(cfg_.orb_wide_features);
   icp_params_ = cfg_.icp;
   // Wide-baseline ICP (issue 16): twice the coarse iterations, the basin is at the coarse levels.
   wide_icp_params_ = cfg_.icp;
@@ -43,6 +44,7 @@ FrameFeatures Odometry::extract_features(const cv::Mat& gray, const cv::Mat& dep
 }
 
 FrameFeatures Odometry::extract_wide_features(const cv::Mat& gray, const cv::Mat& depth) {
+  if (!wide_orb_) throw Error("Odometry", "tracking.orb_wide_features is 0: no wide-baseline feature set");
   return semap::extract_features(*wide_orb_, gray, depth, intr_, cfg_.min_depth, cfg_.max_depth);
 }
 

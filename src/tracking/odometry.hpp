@@ -53,8 +53,8 @@ class Odometry {
 
   /// ORB keypoints with 3D points of a frame (A2 steps 1-2). Tracking thread only.
   FrameFeatures extract_features(const cv::Mat& gray, const cv::Mat& depth);
-  /// The denser set of the wide-baseline attempt (tracking.orb_wide_features; the per-frame
-  /// set's size when that is 0). Tracking thread only.
+  /// The denser set of the wide-baseline attempt (tracking.orb_wide_features, which must be
+  /// > 0). Tracking thread only.
   FrameFeatures extract_wide_features(const cv::Mat& gray, const cv::Mat& depth);
   /// ICP pyramid of a frame; `source_only` for a tracked frame (completed with
   /// complete_target_pyramid if it becomes a keyframe; METHODS.md A2 step 4).

@@ -186,7 +186,7 @@ struct TrackingConfig {
   int orb_features = 700;              ///< ORB keypoints per frame
   /// ORB keypoints of the wide-baseline attempt (issue 42): a denser set of the frame and of its
   /// reference keyframe, extracted only when the per-frame registration failed (a wide
-  /// baseline leaves too few of orb_features in common; 0: the per-frame set).
+  /// baseline leaves too few of orb_features in common; 0: no such attempt).
   int orb_wide_features = 2000;
   int orb_levels = 4;                  ///< ORB scale pyramid levels
   double orb_scale_factor = 1.2;       ///< ORB pyramid scale step
@@ -262,7 +262,7 @@ struct TrackingConfig {
     v.param("min_depth", min_depth, "m", "nearer depth is ignored by tracking", non_negative(100.0));
     v.param("max_depth", max_depth, "m", "farther depth is ignored by tracking", positive(100.0));
     v.param("orb_features", orb_features, "", "ORB keypoints per frame (A2)", {10, 100000});
-    v.param("orb_wide_features", orb_wide_features, "", "ORB keypoints of the wide-baseline attempt, extracted only when the per-frame registration failed (0: orb_features)", {0, 100000});
+    v.param("orb_wide_features", orb_wide_features, "", "ORB keypoints of the wide-baseline attempt, extracted only when the per-frame registration failed (0: no such attempt)", {0, 100000});
     v.param("orb_levels", orb_levels, "", "ORB pyramid levels", {1, 12});
     v.param("orb_scale_factor", orb_scale_factor, "", "ORB pyramid scale step", {1.0, 4.0, true});
     v.param("orb_fast_threshold", orb_fast_threshold, "grey levels", "FAST corner threshold", {1, 255});
