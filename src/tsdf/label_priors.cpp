@@ -1,6 +1,7 @@
 #include "tsdf/label_priors.hpp"
 
 #include <algorithm>
+#include <bitset>
 #include <cmath>
 #include <numbers>
 #include <vector>
@@ -17,7 +18,9 @@ struct Geometry {
   std::vector<Eigen::Vector3d> vertex_normal;    ///< area-weighted, unit (zero if isolated)
   std::vector<Eigen::Vector3d> triangle_normal;  ///< mean of its vertices' normals, unit
   std::vector<Eigen::Vector3d> centroid;
+  std::vector<Eigen::Vector3d> face_normal;      ///< the triangle's own, unit (as wound)
   std::vector<double> area_m2;
+  std::vector<double> vertex_area_m2;            ///< a third of its triangles' area
   std::vector<uint32_t> first, incident;         ///< vertex -> triangles (CSR)
 };
 
@@ -27,11 +30,13 @@ Geometry mesh_geometry(const TriangleMesh& mesh) {
   g.vertex_normal.assign(nv, Eigen::Vector3d::Zero());
   g.triangle_normal.resize(nt);
   g.centroid.resize(nt);
+  g.face_normal.resize(nt);
   g.area_m2.resize(nt);
   g.first.assign(nv + 1, 0);
   for (size_t t = 0; t < nt; ++t) {
     const TriangleGeometry tg = triangle_geometry(mesh, t);
     g.centroid[t] = tg.centroid;
+    g.face_normal[t] = tg.normal;
     g.area_m2[t] = tg.area_m2;
     for (uint32_t v : mesh.triangles[t]) {
       g.vertex_normal[v] += tg.area_m2 * tg.normal;  // area-weighted
@@ -51,6 +56,9 @@ Geometry mesh_geometry(const TriangleMesh& mesh) {
     }
     g.triangle_normal[t] = n.norm() > 0 ? n.normalized() : n;
   }
+  g.vertex_area_m2.assign(nv, 0.0);
+  for (size_t t = 0; t < nt; ++t)
+    for (uint32_t v : mesh.triangles[t]) g.vertex_area_m2[v] += g.area_m2[t] / 3.0;
   return g;
 }
 
@@ -177,20 +185,17 @@ std::vector<int> smooth_segments(const TriangleMesh& mesh, const Geometry& g, do
 }
 
 /// The segments' rule (file comment) on the vertices still unlabelled. Returns how many it labelled.
-size_t fill_from_segments(TriangleMesh& mesh, const Geometry& g, const TsdfConfig& c) {
+size_t fill_from_segments(TriangleMesh& mesh, const Geometry& g, const std::vector<int>& segment, const TsdfConfig& c) {
   auto& labels = mesh.vertices.labels;
   const size_t nv = labels.size();
-  const std::vector<int> segment = smooth_segments(mesh, g, c.label_prior_segment_k);
   const int num_segments = segment.empty() ? 0 : *std::max_element(segment.begin(), segment.end()) + 1;
-  // The vertices of each segment (CSR), and each vertex's area: a third of its triangles'.
+  // The vertices of each segment (CSR).
   std::vector<uint32_t> first(num_segments + 1, 0), members(nv);
   for (int s : segment) ++first[s + 1];
   for (int s = 0; s < num_segments; ++s) first[s + 1] += first[s];
   std::vector<uint32_t> fill(first.begin(), first.end() - 1);
   for (size_t v = 0; v < nv; ++v) members[fill[segment[v]]++] = static_cast<uint32_t>(v);
-  std::vector<double> vertex_area(nv, 0.0);
-  for (size_t v = 0; v < nv; ++v)
-    for (uint32_t k = g.first[v]; k < g.first[v + 1]; ++k) vertex_area[v] += g.area_m2[g.incident[k]] / 3.0;
+  const std::vector<double>& vertex_area = g.vertex_area_m2;
 
   size_t filled = 0;
   std::vector<double> area(kNumClasses);
@@ -218,6 +223,181 @@ size_t fill_from_segments(TriangleMesh& mesh, const Geometry& g, const TsdfConfi
   return filled;
 }
 
+
+/// The map's own class frequencies: each class's share of the labelled area, plus
+/// kUnseenClassShare, so that a class the map shows nowhere needs far stronger evidence to appear.
+std::array<float, kNumClasses> scene_class_prior(const std::vector<ClassId>& labels, const Geometry& g) {
+  constexpr double kUnseenClassShare = 1e-3;
+  std::array<double, kNumClasses> area{};
+  double labelled = 0.0;
+  for (size_t v = 0; v < labels.size(); ++v)
+    if (labels[v] != 0 && labels[v] < kNumClasses) area[labels[v]] += g.vertex_area_m2[v], labelled += g.vertex_area_m2[v];
+  std::array<float, kNumClasses> prior{};
+  for (int c = 1; c < kNumClasses; ++c)
+    prior[c] = static_cast<float>((labelled > 0.0 ? area[c] / labelled : 0.0) + kUnseenClassShare);
+  return prior;
+}
+
+using ClassSet = std::bitset<kNumClasses>;
+
+/// The classes each smooth segment's labelled vertices show.
+std::vector<ClassSet> segment_classes(const std::vector<ClassId>& labels, const std::vector<int>& segment) {
+  const int num_segments = segment.empty() ? 0 : *std::max_element(segment.begin(), segment.end()) + 1;
+  std::vector<ClassSet> shown(num_segments);
+  for (size_t v = 0; v < labels.size(); ++v)
+    if (labels[v] != 0 && labels[v] < kNumClasses) shown[segment[v]].set(labels[v]);
+  return shown;
+}
+
+/// A structural region's plane and extent: a vertex near it lies at its junction with another surface.
+struct StructuralPlane {
+  Eigen::Vector3d normal, point;
+  Eigen::AlignedBox3d box;
+};
+
+StructuralPlane structural_plane(const TriangleMesh& mesh, const Region& r) {
+  StructuralPlane s{r.normal_sum.normalized(), r.point_sum / r.area_m2, {}};
+  for (uint32_t t : r.triangles)
+    for (uint32_t v : mesh.triangles[t]) s.box.extend(mesh.vertices.points[v].cast<double>());
+  return s;
+}
+
+bool near_structure(const std::vector<StructuralPlane>& planes, const Eigen::Vector3d& x, double plane_m) {
+  for (const StructuralPlane& s : planes)
+    if (std::fabs(s.normal.dot(x - s.point)) <= plane_m && s.box.exteriorDistance(x) <= plane_m) return true;
+  return false;
+}
+
+/// What every rule reads: the mesh's geometry, up, the floor and the class rules.
+struct Surface {
+  const TriangleMesh& mesh;
+  Geometry g;
+  Eigen::Vector3d up;
+  const GravityEstimate& gravity;
+  ClassRules rules;
+  double cos_tilt, sin_tilt;
+
+  Surface(const TriangleMesh& m, const GravityEstimate& gr, const TsdfConfig& c)
+      : mesh(m), g(mesh_geometry(m)), up(gr.up_W.normalized()), gravity(gr),
+        rules{c.label_prior_normals, c.label_prior_heights, c.label_prior_floor_band_m, c.label_prior_min_ceiling_height_m} {
+    const double tilt = c.label_prior_max_tilt_deg * std::numbers::pi / 180.0;
+    cos_tilt = std::cos(tilt), sin_tilt = std::sin(tilt);
+  }
+  double height(size_t v) const {
+    return gravity.floor_found ? up.dot(mesh.vertices.points[v].cast<double>()) - gravity.floor_height_m : std::nan("");
+  }
+  Facing vertex_facing(size_t v) const { return facing(g.vertex_normal[v], up, cos_tilt, sin_tilt); }
+  /// Marks the structural classes vertex v's smoothed normal or height rules out; false when none.
+  bool rule_out_at(size_t v, std::array<bool, kNumClasses>& ruled_out) const {
+    const Facing f = vertex_facing(v);
+    bool any = false;
+    for (Label structural : {Label::kWall, Label::kFloor, Label::kCeiling})
+      any |= ruled_out[id(structural)] = !rules.fits(id(structural), f, height(v));
+    return any;
+  }
+  /// ... and those that any triangle around v rules out (its own normal, not the smoothed one).
+  void rule_out_around(size_t v, std::array<bool, kNumClasses>& ruled_out) const {
+    rule_out_at(v, ruled_out);
+    for (uint32_t k = g.first[v]; k < g.first[v + 1]; ++k) {
+      const Facing f = facing(g.face_normal[g.incident[k]], up, cos_tilt, sin_tilt);
+      for (Label structural : {Label::kWall, Label::kFloor, Label::kCeiling})
+        ruled_out[id(structural)] = ruled_out[id(structural)] || !rules.fits(id(structural), f, height(v));
+    }
+  }
+};
+
+/// The class rules, per vertex (its smoothed normal, its height): 1 where the label contradicts.
+std::vector<uint8_t> find_contradictions(const Surface& s, const std::vector<ClassId>& labels, LabelPriorStats& stats) {
+  std::vector<uint8_t> contradicts(labels.size(), 0);
+  for (size_t v = 0; v < labels.size(); ++v)
+    if (labels[v] != 0 && !s.rules.fits(labels[v], s.vertex_facing(v), s.height(v))) {
+      contradicts[v] = 1;
+      ++stats.contradicting;
+    }
+  return contradicts;
+}
+
+/// The regions' rule (file comment), from the labels before the class rules removed any. Returns
+/// the planes of the regions it decided wall, floor or ceiling.
+std::vector<StructuralPlane> decide_regions(const Surface& s, std::vector<ClassId>& labels, std::vector<uint8_t>& contradicts,
+                                            const TsdfConfig& c, LabelPriorStats& stats) {
+  std::vector<Facing> tri_facing(s.mesh.triangles.size());
+  for (size_t t = 0; t < tri_facing.size(); ++t) tri_facing[t] = facing(s.g.triangle_normal[t], s.up, s.cos_tilt, s.sin_tilt);
+  const std::vector<Region> regions = grow_regions(s.mesh, s.g, tri_facing, c);
+  std::vector<StructuralPlane> structure;
+  std::vector<uint8_t> done(labels.size(), 0);
+  for (const Region& region : regions) {
+    const ClassId cls = region_class(s.mesh, s.g, region, s.rules, s.gravity, c);
+    if (cls == 0) continue;
+    if (is_structural(cls)) structure.push_back(structural_plane(s.mesh, region));
+    ++stats.regions;
+    stats.region_area_m2 += region.area_m2;
+    for (uint32_t t : region.triangles)
+      for (uint32_t v : s.mesh.triangles[t]) {
+        if (done[v]) continue;
+        done[v] = 1;
+        const ClassId old = labels[v];
+        if (old == cls) continue;
+        if (old == 0 || contradicts[v]) {
+          ++stats.filled;
+        } else if (is_structural(cls) && !may_lie_in_plane(old)) {
+          ++stats.replaced;
+        } else {
+          continue;
+        }
+        labels[v] = cls;
+        contradicts[v] = 0;
+      }
+  }
+  return structure;
+}
+
+/// Unlabels what still contradicts; with `evidence`, gives it (and any unlabelled vertex where
+/// the geometry rules a class out) the class the evidence shows among the fitting ones.
+void refit_from_evidence(const Surface& s, std::vector<ClassId>& labels, const std::vector<uint8_t>& contradicts,
+                         const SurfaceLabelEvidence& evidence, LabelPriorStats& stats) {
+  for (size_t v = 0; v < labels.size(); ++v) {
+    if (!contradicts[v] && labels[v] != 0) continue;
+    if (contradicts[v]) labels[v] = 0;
+    std::array<bool, kNumClasses> ruled_out{};
+    if (evidence.size() != labels.size() || !s.rule_out_at(v, ruled_out)) continue;  // the voxel's decision stands
+    labels[v] = evidence.label_excluding(v, ruled_out);
+    stats.refitted += labels[v] != 0;
+  }
+}
+
+/// The likely rule (file comment) on the vertices still unlabelled.
+void fill_likely(const Surface& s, std::vector<ClassId>& labels, const std::vector<int>& segment,
+                 const SurfaceLabelEvidence& evidence, const TsdfConfig& c, LabelPriorStats& stats) {
+  const std::array<float, kNumClasses> prior = scene_class_prior(labels, s.g);
+  const std::vector<ClassSet> confident = segment_classes(labels, segment);
+  for (size_t v = 0; v < labels.size(); ++v) {
+    if (labels[v] != 0) continue;
+    // Wall, floor and ceiling need every triangle around the vertex to fit: thin evidence on a
+    // noisy surface must not tilt the structure.
+    std::array<bool, kNumClasses> ruled_out{};
+    s.rule_out_around(v, ruled_out);
+    const ClassId likely = evidence.likely_excluding(v, ruled_out, prior, static_cast<float>(c.label_prior_likely_probability));
+    // Within a smooth segment that shows confident classes, only those: a border vertex whose
+    // voxel also saw the neighbouring object does not take its class.
+    const ClassSet& shown = confident[segment[v]];
+    if (likely == 0 || (shown.any() && !shown.test(likely))) continue;
+    labels[v] = likely;
+    ++stats.likely_filled;
+  }
+}
+
+/// The `other` rule (file comment): contradicted, still unlabelled, away from the structure's junctions.
+void fill_other(const Surface& s, std::vector<ClassId>& labels, const std::vector<uint8_t>& contradicts,
+                const std::vector<StructuralPlane>& structure, const TsdfConfig& c, LabelPriorStats& stats) {
+  for (size_t v = 0; v < labels.size(); ++v)
+    if (labels[v] == 0 && contradicts[v] &&
+        !near_structure(structure, s.mesh.vertices.points[v].cast<double>(), c.label_prior_region_plane_m)) {
+      labels[v] = id(Label::kOther);
+      ++stats.other_filled;
+    }
+}
+
 }  // namespace
 
 LabelPriorStats apply_label_priors(TriangleMesh& mesh, const GravityEstimate& gravity, const TsdfConfig& c,
@@ -225,75 +405,20 @@ LabelPriorStats apply_label_priors(TriangleMesh& mesh, const GravityEstimate& gr
   LabelPriorStats stats;
   auto& labels = mesh.vertices.labels;
   if (labels.size() != mesh.vertices.points.size() || mesh.triangles.empty()) return stats;
-  if (!c.label_prior_normals && !c.label_prior_heights && !c.label_prior_regions && !c.label_prior_segments)
+  if (!c.label_prior_normals && !c.label_prior_heights && !c.label_prior_regions && !c.label_prior_segments &&
+      !c.label_prior_likely && !c.label_prior_other)
     return stats;
-  const ClassRules rules{c.label_prior_normals, c.label_prior_heights, c.label_prior_floor_band_m,
-                         c.label_prior_min_ceiling_height_m};
-  const double tilt = c.label_prior_max_tilt_deg * std::numbers::pi / 180.0;
-  const double cos_tilt = std::cos(tilt), sin_tilt = std::sin(tilt);
-  const Eigen::Vector3d up = gravity.up_W.normalized();
-  const Geometry g = mesh_geometry(mesh);
-  const auto height_of = [&](const Eigen::Vector3d& p) {
-    return gravity.floor_found ? up.dot(p) - gravity.floor_height_m : std::nan("");
-  };
-
-  // The class rules, per vertex (its smoothed normal, its height).
-  std::vector<uint8_t> contradicts(labels.size(), 0);
-  for (size_t v = 0; v < labels.size(); ++v) {
-    if (labels[v] == 0) continue;
-    const Facing f = facing(g.vertex_normal[v], up, cos_tilt, sin_tilt);
-    if (!rules.fits(labels[v], f, height_of(mesh.vertices.points[v].cast<double>()))) {
-      contradicts[v] = 1;
-      ++stats.contradicting;
-    }
-  }
-  // The regions decide, from the labels before the class rules removed any.
-  if (c.label_prior_regions) {
-    std::vector<Facing> tri_facing(mesh.triangles.size());
-    for (size_t t = 0; t < tri_facing.size(); ++t) tri_facing[t] = facing(g.triangle_normal[t], up, cos_tilt, sin_tilt);
-    const std::vector<Region> regions = grow_regions(mesh, g, tri_facing, c);
-    std::vector<ClassId> decided(regions.size());
-    for (size_t i = 0; i < regions.size(); ++i) decided[i] = region_class(mesh, g, regions[i], rules, gravity, c);
-    std::vector<uint8_t> done(labels.size(), 0);
-    for (size_t i = 0; i < regions.size(); ++i) {
-      const ClassId cls = decided[i];
-      if (cls == 0) continue;
-      ++stats.regions;
-      stats.region_area_m2 += regions[i].area_m2;
-      for (uint32_t t : regions[i].triangles)
-        for (uint32_t v : mesh.triangles[t]) {
-          if (done[v]) continue;
-          done[v] = 1;
-          const ClassId old = labels[v];
-          if (old == cls) continue;
-          if (old == 0 || contradicts[v]) {
-            ++stats.filled;
-          } else if (is_structural(cls) && !may_lie_in_plane(old)) {
-            ++stats.replaced;
-          } else {
-            continue;
-          }
-          labels[v] = cls;
-          contradicts[v] = 0;
-        }
-    }
-  }
-  const bool use_evidence = (c.label_prior_normals || c.label_prior_heights) && evidence.size() == labels.size();
-  for (size_t v = 0; v < labels.size(); ++v) {
-    if (!contradicts[v] && labels[v] != 0) continue;
-    if (contradicts[v]) labels[v] = 0;
-    if (!use_evidence) continue;
-    const Facing f = facing(g.vertex_normal[v], up, cos_tilt, sin_tilt);
-    const double height = height_of(mesh.vertices.points[v].cast<double>());
-    std::array<bool, kNumClasses> ruled_out{};
-    bool any = false;
-    for (Label structural : {Label::kWall, Label::kFloor, Label::kCeiling})
-      any |= ruled_out[id(structural)] = !rules.fits(id(structural), f, height);
-    if (!any) continue;  // nothing ruled out: the voxel's own decision stands
-    labels[v] = evidence.label_excluding(v, ruled_out);
-    stats.refitted += labels[v] != 0;
-  }
-  if (c.label_prior_segments) stats.segment_filled = fill_from_segments(mesh, g, c);
+  const Surface s(mesh, gravity, c);
+  std::vector<uint8_t> contradicts = find_contradictions(s, labels, stats);
+  std::vector<StructuralPlane> structure;
+  if (c.label_prior_regions) structure = decide_regions(s, labels, contradicts, c, stats);
+  const bool geometry = c.label_prior_normals || c.label_prior_heights;
+  refit_from_evidence(s, labels, contradicts, geometry ? evidence : SurfaceLabelEvidence{}, stats);
+  const bool use_segments = c.label_prior_segments || c.label_prior_likely;
+  const std::vector<int> segment = use_segments ? smooth_segments(mesh, s.g, c.label_prior_segment_k) : std::vector<int>{};
+  if (c.label_prior_likely && evidence.size() == labels.size()) fill_likely(s, labels, segment, evidence, c, stats);
+  if (c.label_prior_segments) stats.segment_filled = fill_from_segments(mesh, s.g, segment, c);
+  if (c.label_prior_other) fill_other(s, labels, contradicts, structure, c, stats);
   return stats;
 }
 

@@ -36,6 +36,21 @@
 //    otherwise become a wall). Parts of things the network saw too rarely or too uncertainly for
 //    the per-voxel thresholds take the class of the surface they belong to; a segment boundary
 //    (an edge, a corner, a change of curvature) stops it, as labels in a person's annotation do.
+//    The segments are cut before the likely rule and shared with it.
+//  - likely (before the segments' fill): a vertex still unlabelled whose voxel was labelled takes
+//    the class c its evidence makes most probable, weighted by the map's own class frequencies
+//    (the share of the labelled area, plus 1e-3 for a class the map shows nowhere):
+//    argmax p(c | evidence) * prior(c) over the classes the network named there, when it leads
+//    every other class and holds likely_probability of the sum (0: the most probable). Wall,
+//    floor and ceiling are allowed only where every triangle around the vertex fits them. In a
+//    smooth segment whose labelled vertices show some classes, only those. A surface seen in few
+//    semantic frames, or from far, is named by its best evidence instead of left blank; a border
+//    vertex whose voxel also saw the neighbouring object keeps to its segment's classes.
+//  - other (last): a vertex whose wall, floor or ceiling label its surface contradicts, that no
+//    rule relabelled and that lies off the planes (region_plane_m) of the regions decided wall,
+//    floor or ceiling, is `other`: an object the network does not name, in front of the
+//    structure (the network calls a shelf's clutter wall). At a junction of two structural
+//    planes it stays unlabelled.
 #include <cstddef>
 
 #include "semap/core/gravity.hpp"
@@ -52,6 +67,8 @@ struct LabelPriorStats {
   size_t replaced = 0;       ///< object labels in a wall/floor/ceiling plane given its class
   size_t refitted = 0;       ///< vertices given the class their evidence shows among the fitting ones
   size_t segment_filled = 0; ///< unlabelled vertices given their smooth segment's class
+  size_t likely_filled = 0;  ///< unlabelled vertices given their likely class (the likely rule)
+  size_t other_filled = 0;   ///< structural labels ruled out, nothing fitting: `other`
   size_t regions = 0;        ///< regions that decided a class
   double region_area_m2 = 0.0;  ///< their area
 };

@@ -92,6 +92,31 @@ ClassId SurfaceLabelEvidence::label_excluding(size_t i, const std::array<bool, k
   return second_p <= 0.0f || best_p >= min_odds_ * second_p ? best : 0;
 }
 
+ClassId SurfaceLabelEvidence::likely_excluding(size_t i, const std::array<bool, kNumClasses>& ruled_out,
+                                               const std::array<float, kNumClasses>& scene_prior,
+                                               float min_probability) const {
+  if (i >= size()) return 0;
+  const ClassDistribution d = codec_.read(&bytes_[i * stride_]);
+  if (d.count == 0) return 0;
+  // p(c | evidence) * prior(c); the classes the voxel's evidence does not list share rest_each,
+  // count in the sum and as runner-up, but never win: a guess names a class the network saw there.
+  std::array<bool, kNumClasses> listed{};
+  for (int k = 0; k < d.count; ++k) listed[d.classes[k]] = true;
+  ClassId best = 0;
+  float total = 0.0f, best_w = 0.0f, second_w = 0.0f;
+  for (int c = 1; c < kNumClasses; ++c) {
+    if (ruled_out[c]) continue;
+    float p = d.rest_each;
+    for (int k = 0; k < d.count; ++k)
+      if (d.classes[k] == c) p = d.probabilities[k];
+    const float w = p * scene_prior[c];
+    total += w;
+    if (listed[c] && w > best_w) second_w = std::max(second_w, best_w), best_w = w, best = ClassId(c);
+    else second_w = std::max(second_w, w);
+  }
+  return best != 0 && best_w > second_w && best_w >= min_probability * total ? best : 0;
+}
+
 std::vector<ClassId> surface_labels(const TsdfMap& map, const std::vector<Eigen::Vector3f>& points) {
   std::vector<ClassId> out(points.size(), 0);
   if (!map.has_bayes_layer() && !map.has_label_layer()) return out;

@@ -43,6 +43,12 @@ class SurfaceLabelEvidence {
   /// remaining class, shown when its conditioned probability reaches mesh_min_label_probability
   /// and it leads the remaining runner-up by mesh_min_label_frames frames' votes; else 0.
   ClassId label_excluding(size_t i, const std::array<bool, kNumClasses>& ruled_out) const;
+  /// The likely class of point i where the evidence is too thin for label_excluding: the class c
+  /// not ruled out that maximises p(c | evidence) * scene_prior[c] (the map's own class
+  /// frequencies, so that a class the map shows nowhere needs strong evidence), when it holds
+  /// min_probability of that product's sum and leads the runner-up; else 0 (also when never labelled).
+  ClassId likely_excluding(size_t i, const std::array<bool, kNumClasses>& ruled_out,
+                           const std::array<float, kNumClasses>& scene_prior, float min_probability) const;
 
  private:
   BayesLayerCodec codec_;

@@ -86,12 +86,14 @@ double vertex_accuracy(const World& w) {
   return double(ok) / w.truth.size();
 }
 
-TsdfConfig rules(bool normals, bool heights, bool regions, bool segments = false) {
+TsdfConfig rules(bool normals, bool heights, bool regions, bool segments = false, bool likely = false, bool other = false) {
   TsdfConfig c;
   c.label_prior_normals = normals;
   c.label_prior_heights = heights;
   c.label_prior_regions = regions;
   c.label_prior_segments = segments;
+  c.label_prior_likely = likely;
+  c.label_prior_other = other;
   return c;
 }
 
@@ -308,6 +310,49 @@ TEST(LabelPriors, EvidenceTooThinAfterTheRuleLeavesTheVertexUnlabelled) {
   ASSERT_GT(world.share(0, world.counter_vertices, Label::kWall), 0.99);
   apply_label_priors(world.mesh, gravity(true), strict, SurfaceLabelEvidence(world.map, world.mesh.vertices.points));
   EXPECT_GT(world.share(0, world.counter_vertices, Label::kUnlabelled), 0.99);
+}
+
+TEST(LabelPriors, LikelyRuleNamesThinEvidenceWithinTheClassesItsSegmentShows) {
+  // The counter seen once as cabinet (too thin for the frames' lead), the wall once as wall; a
+  // row of each seen often (the classes the map shows), and one vertex of the counter's seen
+  // once as cup.
+  CounterAndWall world;
+  const size_t counter = world.counter_vertices, all = world.mesh.vertices.points.size();
+  for (size_t v = 0; v < all; ++v) world.set_votes(v, {v < counter ? Label::kCabinet : Label::kWall});
+  const size_t counter_row = 11, wall_row = 25;  // vertices per row of the two planes
+  for (size_t v = 0; v < counter_row; ++v) world.set_votes(v, std::vector<Label>(6, Label::kCabinet));
+  for (size_t v = counter; v < counter + wall_row; ++v) world.set_votes(v, std::vector<Label>(6, Label::kWall));
+  const size_t border = 5;
+  world.set_votes(border, {Label::kCup});
+  world.mesh.vertices.labels = surface_labels(world.map, world.mesh.vertices.points);
+  ASSERT_GT(world.share(counter_row, counter, Label::kUnlabelled), 0.99);
+  ASSERT_GT(world.share(counter + wall_row, all, Label::kUnlabelled), 0.99);
+  const SurfaceLabelEvidence evidence(world.map, world.mesh.vertices.points);
+  const LabelPriorStats s = apply_label_priors(world.mesh, gravity(true), rules(true, true, false, false, true), evidence);
+  EXPECT_GT(world.share(0, counter, Label::kCabinet), 0.99);
+  EXPECT_GT(world.share(counter, all, Label::kWall), 0.99);  // every triangle there is vertical
+  EXPECT_GE(s.likely_filled, all - counter_row - wall_row - 1);
+  // The cup vote lands in a segment that shows only cabinet: it is not taken.
+  EXPECT_NE(world.mesh.vertices.labels[border], id(Label::kCup));
+}
+
+TEST(LabelPriors, StructureRuledOutWithNothingElseSeenIsOther) {
+  // The counter seen six times as wall and nothing else: wall is ruled out (horizontal) and no
+  // class fits, so it is an object the network does not name; the wall stays wall.
+  CounterAndWall world, without;
+  for (CounterAndWall* w : {&world, &without}) {
+    for (size_t v = 0; v < w->mesh.vertices.points.size(); ++v) w->set_votes(v, std::vector<Label>(6, Label::kWall));
+    w->mesh.vertices.labels = surface_labels(w->map, w->mesh.vertices.points);
+  }
+  const size_t counter = world.counter_vertices, all = world.mesh.vertices.points.size();
+  const TsdfConfig with_other = rules(true, true, true, true, true, true), no_other = rules(true, true, true, true, true, false);
+  const LabelPriorStats s =
+      apply_label_priors(world.mesh, gravity(true), with_other, SurfaceLabelEvidence(world.map, world.mesh.vertices.points));
+  apply_label_priors(without.mesh, gravity(true), no_other, SurfaceLabelEvidence(without.map, without.mesh.vertices.points));
+  EXPECT_GT(world.share(0, counter, Label::kOther), 0.99);
+  EXPECT_GT(without.share(0, counter, Label::kUnlabelled), 0.99);
+  EXPECT_GT(world.share(counter, all, Label::kWall), 0.99);
+  EXPECT_GE(s.other_filled, counter);
 }
 
 }  // namespace

@@ -81,6 +81,9 @@ struct TsdfConfig {
   bool label_prior_segments = true;             ///< smooth segments' fitting majority fills their unlabelled parts
   double label_prior_segment_k = 0.01;          ///< Felzenszwalb-Huttenlocher K on normal differences (1 - cos)
   double label_prior_segment_min_labelled = 0.3;  ///< a segment decides when this share of its area is labelled
+  bool label_prior_likely = true;  ///< a vertex still unlabelled takes its likely fitting class
+  double label_prior_likely_probability = 0.0;  ///< ... when it holds this share of the fitting (0: the most probable)
+  bool label_prior_other = true;  ///< a ruled-out structural label that nothing fitting replaces becomes `other`
 
   // Memory for long runs.
   double drop_distance = 0.0;  ///< blocks farther than this from the camera are freed, m (0 = keep all)
@@ -149,6 +152,16 @@ struct TsdfConfig {
             "smooth segments: Felzenszwalb-Huttenlocher K on the normal difference 1 - cos (larger: larger segments)", {1e-5, 1.0});
     v.param("label_prior_segment_min_labelled", label_prior_segment_min_labelled, "",
             "a smooth segment decides only when at least this share of its area is labelled", {0.0, 1.0});
+    v.param("label_prior_likely", label_prior_likely, "",
+            "mesh labels: a vertex still unlabelled after the regions and the evidence refit takes the class its fused "
+            "evidence makes most probable, weighted by the map's class frequencies, among those its surface and its "
+            "smooth segment allow (no frames' lead; tsdf/label_priors.hpp)");
+    v.param("label_prior_likely_probability", label_prior_likely_probability, "",
+            "label_prior_likely: the class's share of the weighted probability of the allowed classes (0: the most probable)",
+            {0.0, 1.0});
+    v.param("label_prior_other", label_prior_other, "",
+            "mesh labels: a vertex whose wall/floor/ceiling label its surface rules out, and that no fitting class "
+            "claims, is `other` (an object the network does not name, in front of the structure)");
     v.param("drop_distance", drop_distance, "m", "free blocks farther than this from the camera (0 = never)", non_negative(1e6));
   }
   void validate() const {
