@@ -184,11 +184,15 @@ std::vector<int> smooth_segments(const TriangleMesh& mesh, const Geometry& g, do
   return felzenszwalb_cluster(static_cast<int>(mesh.vertices.points.size()), std::move(edges), static_cast<float>(k));
 }
 
+int segment_count(const std::vector<int>& segment) {
+  return segment.empty() ? 0 : *std::max_element(segment.begin(), segment.end()) + 1;
+}
+
 /// The segments' rule (file comment) on the vertices still unlabelled. Returns how many it labelled.
 size_t fill_from_segments(TriangleMesh& mesh, const Geometry& g, const std::vector<int>& segment, const TsdfConfig& c) {
   auto& labels = mesh.vertices.labels;
   const size_t nv = labels.size();
-  const int num_segments = segment.empty() ? 0 : *std::max_element(segment.begin(), segment.end()) + 1;
+  const int num_segments = segment_count(segment);
   // The vertices of each segment (CSR).
   std::vector<uint32_t> first(num_segments + 1, 0), members(nv);
   for (int s : segment) ++first[s + 1];
@@ -242,8 +246,7 @@ using ClassSet = std::bitset<kNumClasses>;
 
 /// The classes each smooth segment's labelled vertices show.
 std::vector<ClassSet> segment_classes(const std::vector<ClassId>& labels, const std::vector<int>& segment) {
-  const int num_segments = segment.empty() ? 0 : *std::max_element(segment.begin(), segment.end()) + 1;
-  std::vector<ClassSet> shown(num_segments);
+  std::vector<ClassSet> shown(segment_count(segment));
   for (size_t v = 0; v < labels.size(); ++v)
     if (labels[v] != 0 && labels[v] < kNumClasses) shown[segment[v]].set(labels[v]);
   return shown;
@@ -289,20 +292,23 @@ struct Surface {
   Facing vertex_facing(size_t v) const { return facing(g.vertex_normal[v], up, cos_tilt, sin_tilt); }
   /// Marks the structural classes vertex v's smoothed normal or height rules out; false when none.
   bool rule_out_at(size_t v, std::array<bool, kNumClasses>& ruled_out) const {
-    const Facing f = vertex_facing(v);
-    bool any = false;
-    for (Label structural : {Label::kWall, Label::kFloor, Label::kCeiling})
-      any |= ruled_out[id(structural)] = !rules.fits(id(structural), f, height(v));
-    return any;
+    return rule_out(vertex_facing(v), height(v), ruled_out);
   }
   /// ... and those that any triangle around v rules out (its own normal, not the smoothed one).
   void rule_out_around(size_t v, std::array<bool, kNumClasses>& ruled_out) const {
-    rule_out_at(v, ruled_out);
-    for (uint32_t k = g.first[v]; k < g.first[v + 1]; ++k) {
-      const Facing f = facing(g.face_normal[g.incident[k]], up, cos_tilt, sin_tilt);
-      for (Label structural : {Label::kWall, Label::kFloor, Label::kCeiling})
-        ruled_out[id(structural)] = ruled_out[id(structural)] || !rules.fits(id(structural), f, height(v));
-    }
+    const double h = height(v);
+    rule_out(vertex_facing(v), h, ruled_out);
+    for (uint32_t k = g.first[v]; k < g.first[v + 1]; ++k)
+      rule_out(facing(g.face_normal[g.incident[k]], up, cos_tilt, sin_tilt), h, ruled_out);
+  }
+
+ private:
+  /// Adds the structural classes a surface facing `f` at `height_m` rules out; true when any.
+  bool rule_out(Facing f, double height_m, std::array<bool, kNumClasses>& ruled_out) const {
+    bool any = false;
+    for (Label structural : {Label::kWall, Label::kFloor, Label::kCeiling})
+      if (!rules.fits(id(structural), f, height_m)) any = ruled_out[id(structural)] = true;
+    return any;
   }
 };
 

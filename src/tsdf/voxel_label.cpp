@@ -100,16 +100,15 @@ ClassId SurfaceLabelEvidence::likely_excluding(size_t i, const std::array<bool, 
   if (d.count == 0) return 0;
   // p(c | evidence) * prior(c); the classes the voxel's evidence does not list share rest_each,
   // count in the sum and as runner-up, but never win: a guess names a class the network saw there.
+  std::array<float, kNumClasses> p;
+  p.fill(d.rest_each);
   std::array<bool, kNumClasses> listed{};
-  for (int k = 0; k < d.count; ++k) listed[d.classes[k]] = true;
+  for (int k = 0; k < d.count; ++k) p[d.classes[k]] = d.probabilities[k], listed[d.classes[k]] = true;
   ClassId best = 0;
   float total = 0.0f, best_w = 0.0f, second_w = 0.0f;
   for (int c = 1; c < kNumClasses; ++c) {
     if (ruled_out[c]) continue;
-    float p = d.rest_each;
-    for (int k = 0; k < d.count; ++k)
-      if (d.classes[k] == c) p = d.probabilities[k];
-    const float w = p * scene_prior[c];
+    const float w = p[c] * scene_prior[c];
     total += w;
     if (listed[c] && w > best_w) second_w = std::max(second_w, best_w), best_w = w, best = ClassId(c);
     else second_w = std::max(second_w, w);

@@ -332,7 +332,7 @@ TEST(LabelPriors, LikelyRuleNamesThinEvidenceWithinTheClassesItsSegmentShows) {
   EXPECT_GT(world.share(0, counter, Label::kCabinet), 0.99);
   EXPECT_GT(world.share(counter, all, Label::kWall), 0.99);  // every triangle there is vertical
   EXPECT_GE(s.likely_filled, all - counter_row - wall_row - 1);
-  // The cup vote lands in a segment that shows only cabinet: it is not taken.
+  // The cup vote is not taken: cup is a class the map shows nowhere, and its segment shows only cabinet.
   EXPECT_NE(world.mesh.vertices.labels[border], id(Label::kCup));
 }
 
