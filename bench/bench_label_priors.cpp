@@ -85,21 +85,22 @@ int main(int argc, char** argv) {
       const GravityEstimate gravity = estimate_gravity(raw, trajectory);
       struct Variant {
         const char* name;
-        bool normals, heights, regions, evidence, segments, likely, other;
+        bool normals, heights, regions, evidence, segments, likely, other, fringes;
       };
       const SurfaceLabelEvidence evidence(map, raw.vertices.points);
-      for (const Variant& v : {Variant{"none", false, false, false, false, false, false, false},
-                               Variant{"normals", true, false, false, false, false, false, false},
-                               Variant{"heights", false, true, false, false, false, false, false},
-                               Variant{"regions", false, false, true, false, false, false, false},
-                               Variant{"segments", false, false, false, false, true, false, false},
-                               Variant{"normals+heights", true, true, false, false, false, false, false},
-                               Variant{"normals+heights+evidence", true, true, false, true, false, false, false},
-                               Variant{"all but evidence", true, true, true, false, true, true, true},
-                               Variant{"all but segments", true, true, true, true, false, true, true},
-                               Variant{"all but likely", true, true, true, true, true, false, true},
-                               Variant{"all but other", true, true, true, true, true, true, false},
-                               Variant{"all", true, true, true, true, true, true, true}}) {
+      for (const Variant& v : {Variant{"none", false, false, false, false, false, false, false, false},
+                               Variant{"normals", true, false, false, false, false, false, false, false},
+                               Variant{"heights", false, true, false, false, false, false, false, false},
+                               Variant{"regions", false, false, true, false, false, false, false, false},
+                               Variant{"segments", false, false, false, false, true, false, false, false},
+                               Variant{"normals+heights", true, true, false, false, false, false, false, false},
+                               Variant{"normals+heights+evidence", true, true, false, true, false, false, false, false},
+                               Variant{"all but evidence", true, true, true, false, true, true, true, true},
+                               Variant{"all but segments", true, true, true, true, false, true, true, true},
+                               Variant{"all but likely", true, true, true, true, true, false, true, true},
+                               Variant{"all but other", true, true, true, true, true, true, false, true},
+                               Variant{"all but fringes", true, true, true, true, true, true, true, false},
+                               Variant{"all", true, true, true, true, true, true, true, true}}) {
         TsdfConfig c = map.config();
         c.label_prior_normals = v.normals;
         c.label_prior_heights = v.heights;
@@ -107,6 +108,7 @@ int main(int argc, char** argv) {
         c.label_prior_segments = v.segments;
         c.label_prior_likely = v.likely;
         c.label_prior_other = v.other;
+        c.label_prior_fringes = v.fringes;
         TriangleMesh mesh = raw;
         const LabelPriorStats s = apply_label_priors(mesh, gravity, c, v.evidence ? evidence : SurfaceLabelEvidence{});
         nlohmann::json j{{"map", dir.filename()}, {"min_p", map.config().mesh_min_label_probability},
@@ -120,6 +122,7 @@ int main(int argc, char** argv) {
         j["segment_filled"] = s.segment_filled;
         j["likely_filled"] = s.likely_filled;
         j["other_filled"] = s.other_filled;
+        j["fringe_filled"] = s.fringe_filled;
         j["regions"] = s.regions;
         j["region_area_share"] = s.region_area_m2 / evaluate_consistency(raw, trajectory).mesh_area_m2;
         std::printf("%s\n", j.dump().c_str());

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bitset>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <vector>
 
@@ -404,6 +405,70 @@ void fill_other(const Surface& s, std::vector<ClassId>& labels, const std::vecto
     }
 }
 
+/// The fringes' rule (file comment). `reach_m`: how far along the mesh each vertex lies from
+/// where its class was decided (0: labelled by an earlier rule or the voxels).
+void fill_fringes(const Surface& s, std::vector<ClassId>& labels, const std::vector<int>& segment, const TsdfConfig& c,
+                  LabelPriorStats& stats) {
+  const size_t nv = labels.size();
+  const auto& points = s.mesh.vertices.points;
+  std::vector<float> reach_m(nv, std::numeric_limits<float>::infinity());
+  for (size_t v = 0; v < nv; ++v)
+    if (labels[v] != 0) reach_m[v] = 0.0f;
+  // Calls f(u) once per vertex u sharing a triangle with v (the pass's stamp dedupes shared edges).
+  std::vector<uint32_t> stamp(nv, std::numeric_limits<uint32_t>::max());
+  uint32_t pass = 0;
+  const auto for_each_neighbour = [&](uint32_t v, auto&& f) {
+    ++pass;
+    for (uint32_t k = s.g.first[v]; k < s.g.first[v + 1]; ++k)
+      for (uint32_t u : s.mesh.triangles[s.g.incident[k]])
+        if (u != v && stamp[u] != pass) stamp[u] = pass, f(u);
+  };
+  struct Decision {
+    uint32_t vertex;
+    ClassId cls;
+    float reach_m;
+  };
+  std::vector<Decision> ring;
+  std::vector<uint32_t> frontier;
+  for (uint32_t v = 0; v < nv; ++v)
+    if (labels[v] == 0) frontier.push_back(v);
+  while (!frontier.empty()) {
+    ring.clear();
+    for (uint32_t v : frontier) {
+      std::array<double, kNumClasses> votes{};
+      std::array<float, kNumClasses> reach;
+      reach.fill(std::numeric_limits<float>::infinity());
+      for_each_neighbour(v, [&](uint32_t u) {
+        const ClassId l = labels[u];
+        if (l == 0 || l >= kNumClasses || segment[u] != segment[v]) return;
+        const float d = reach_m[u] + (points[u] - points[v]).norm();
+        if (d > c.label_prior_fringe_m) return;
+        votes[l] += s.g.vertex_area_m2[u];
+        reach[l] = std::min(reach[l], d);
+      });
+      std::array<bool, kNumClasses> ruled_out{};
+      s.rule_out_around(v, ruled_out);
+      for (int l = 1; l < kNumClasses; ++l)
+        if (ruled_out[l]) votes[l] = 0.0;
+      const auto best = static_cast<ClassId>(std::max_element(votes.begin() + 1, votes.end()) - votes.begin());
+      if (votes[best] > 0.0) ring.push_back({v, best, reach[best]});
+    }
+    // One ring at a time: a class spreads outward from where it was decided, not along the scan order.
+    frontier.clear();
+    for (const Decision& d : ring) {
+      labels[d.vertex] = d.cls;
+      reach_m[d.vertex] = d.reach_m;
+      ++stats.fringe_filled;
+    }
+    for (const Decision& d : ring)
+      for_each_neighbour(d.vertex, [&](uint32_t u) {
+        if (labels[u] == 0) frontier.push_back(u);
+      });
+    std::sort(frontier.begin(), frontier.end());
+    frontier.erase(std::unique(frontier.begin(), frontier.end()), frontier.end());
+  }
+}
+
 }  // namespace
 
 LabelPriorStats apply_label_priors(TriangleMesh& mesh, const GravityEstimate& gravity, const TsdfConfig& c,
@@ -412,7 +477,7 @@ LabelPriorStats apply_label_priors(TriangleMesh& mesh, const GravityEstimate& gr
   auto& labels = mesh.vertices.labels;
   if (labels.size() != mesh.vertices.points.size() || mesh.triangles.empty()) return stats;
   if (!c.label_prior_normals && !c.label_prior_heights && !c.label_prior_regions && !c.label_prior_segments &&
-      !c.label_prior_likely && !c.label_prior_other)
+      !c.label_prior_likely && !c.label_prior_other && !c.label_prior_fringes)
     return stats;
   const Surface s(mesh, gravity, c);
   std::vector<uint8_t> contradicts = find_contradictions(s, labels, stats);
@@ -420,11 +485,12 @@ LabelPriorStats apply_label_priors(TriangleMesh& mesh, const GravityEstimate& gr
   if (c.label_prior_regions) structure = decide_regions(s, labels, contradicts, c, stats);
   const bool geometry = c.label_prior_normals || c.label_prior_heights;
   refit_from_evidence(s, labels, contradicts, geometry ? evidence : SurfaceLabelEvidence{}, stats);
-  const bool use_segments = c.label_prior_segments || c.label_prior_likely;
+  const bool use_segments = c.label_prior_segments || c.label_prior_likely || c.label_prior_fringes;
   const std::vector<int> segment = use_segments ? smooth_segments(mesh, s.g, c.label_prior_segment_k) : std::vector<int>{};
   if (c.label_prior_likely && evidence.size() == labels.size()) fill_likely(s, labels, segment, evidence, c, stats);
   if (c.label_prior_segments) stats.segment_filled = fill_from_segments(mesh, s.g, segment, c);
   if (c.label_prior_other) fill_other(s, labels, contradicts, structure, c, stats);
+  if (c.label_prior_fringes) fill_fringes(s, labels, segment, c, stats);
   return stats;
 }
 

@@ -47,7 +47,7 @@ TEST(Demo, FiguresOfTheReadmeHoldAndTheBayesianLayerBeatsTheCompactVote) {
   // on by default) off: they repair either rule's mesh afterwards.
   const std::string no_priors = "tsdf:\n  label_prior_normals: false\n  label_prior_heights: false\n"
                                 "  label_prior_regions: false\n  label_prior_segments: false\n"
-                                "  label_prior_likely: false\n  label_prior_other: false\n";
+                                "  label_prior_likely: false\n  label_prior_other: false\n  label_prior_fringes: false\n";
   const nlohmann::json fused = run_demo(dir, "bayes_no_priors", no_priors);
   const nlohmann::json compact = run_demo(dir, "compact_no_priors", no_priors + "  bayes_layer: false\n");
   ASSERT_TRUE(bayes.is_object() && fused.is_object() && compact.is_object()) << "no report.json";

@@ -86,7 +86,8 @@ double vertex_accuracy(const World& w) {
   return double(ok) / w.truth.size();
 }
 
-TsdfConfig rules(bool normals, bool heights, bool regions, bool segments = false, bool likely = false, bool other = false) {
+TsdfConfig rules(bool normals, bool heights, bool regions, bool segments = false, bool likely = false, bool other = false,
+                 bool fringes = false) {
   TsdfConfig c;
   c.label_prior_normals = normals;
   c.label_prior_heights = heights;
@@ -94,6 +95,7 @@ TsdfConfig rules(bool normals, bool heights, bool regions, bool segments = false
   c.label_prior_segments = segments;
   c.label_prior_likely = likely;
   c.label_prior_other = other;
+  c.label_prior_fringes = fringes;
   return c;
 }
 
@@ -353,6 +355,53 @@ TEST(LabelPriors, StructureRuledOutWithNothingElseSeenIsOther) {
   EXPECT_GT(without.share(0, counter, Label::kUnlabelled), 0.99);
   EXPECT_GT(world.share(counter, all, Label::kWall), 0.99);
   EXPECT_GE(s.other_filled, counter);
+}
+
+TEST(LabelPriors, FringesCloseSeamsWithinTheirReachAndStopAtACrease) {
+  // A table top (0.75 m above the floor, 2 cm spacing) meeting a wall at x = 0. The voxels left
+  // a seam where they meet: two profile vertices either side of the junction and the junction
+  // itself unlabelled; and a 30 cm stretch in the middle of the table top.
+  std::vector<Eigen::Vector2f> profile;
+  std::vector<ClassId> truth, observed;
+  const auto add = [&](float x, float z, Label l, bool seen) {
+    profile.emplace_back(x, z), truth.push_back(id(l)), observed.push_back(seen ? id(l) : ClassId(0));
+  };
+  for (int i = 40; i >= 1; --i) add(-0.02f * i, 0.75f, Label::kTable, i > 2 && (i < 10 || i > 24));
+  add(0.0f, 0.75f, Label::kTable, false);  // the junction
+  for (int i = 1; i <= 40; ++i) add(0.0f, 0.75f + 0.02f * i, Label::kWall, i > 2);
+  World w = bent_sheet(profile, truth, 1.0, 1);
+  const int ny = 30;
+  for (size_t k = 0; k < profile.size(); ++k)
+    for (int j = 0; j <= ny; ++j) w.mesh.vertices.labels[k * (ny + 1) + j] = observed[k];
+  const auto label_at = [&](const World& world, size_t k) { return world.mesh.vertices.labels[k * (ny + 1) + ny / 2]; };
+  const size_t junction = 40;
+
+  TsdfConfig c = rules(true, true, false, false, false, false, true);
+  c.label_prior_fringe_m = 0.05;
+  World reach_5cm = w;
+  const LabelPriorStats s = apply_label_priors(reach_5cm.mesh, gravity(true), c);
+  for (size_t k : {junction - 2, junction - 1}) EXPECT_EQ(label_at(reach_5cm, k), id(Label::kTable)) << k;
+  for (size_t k : {junction + 1, junction + 2}) EXPECT_EQ(label_at(reach_5cm, k), id(Label::kWall)) << k;
+  EXPECT_EQ(label_at(reach_5cm, junction), 0) << "6 cm from either side: out of reach";
+  // The middle of the table top's gap: 2 and 4 cm from its labelled edges filled, the rest not.
+  for (size_t k : {16u, 17u, 29u, 30u}) EXPECT_EQ(label_at(reach_5cm, k), id(Label::kTable)) << k;
+  for (size_t k = 18; k <= 28; ++k) EXPECT_EQ(label_at(reach_5cm, k), 0) << k;
+  EXPECT_EQ(s.fringe_filled, 8u * (ny + 1));
+
+  // A class does not cross a crease, however far it may reach: with the wall never labelled,
+  // the table's class stays on the table top.
+  World bare_wall = w;
+  for (size_t k = junction + 1; k < profile.size(); ++k)
+    for (int j = 0; j <= ny; ++j) bare_wall.mesh.vertices.labels[k * (ny + 1) + j] = 0;
+  c.label_prior_fringe_m = 0.5;
+  apply_label_priors(bare_wall.mesh, gravity(true), c);
+  for (size_t k = junction + 1; k < profile.size(); ++k) EXPECT_EQ(label_at(bare_wall, k), 0) << k;
+  for (size_t k = 16; k <= 30; ++k) EXPECT_EQ(label_at(bare_wall, k), id(Label::kTable)) << k;
+  // Switched off, nothing changes.
+  c.label_prior_fringes = false;
+  World off = w;
+  apply_label_priors(off.mesh, gravity(true), c);
+  EXPECT_EQ(off.mesh.vertices.labels, w.mesh.vertices.labels);
 }
 
 }  // namespace

@@ -84,6 +84,8 @@ struct TsdfConfig {
   bool label_prior_likely = true;  ///< a vertex still unlabelled takes its likely fitting class
   double label_prior_likely_probability = 0.0;  ///< ... when it holds this share of the fitting (0: the most probable)
   bool label_prior_other = true;  ///< a ruled-out structural label that nothing fitting replaces becomes `other`
+  bool label_prior_fringes = true;  ///< unlabelled seams near labelled surface of their smooth segment take its fitting class
+  double label_prior_fringe_m = 0.05;  ///< ... within this distance along the mesh of the labelled surface
 
   // Memory for long runs.
   double drop_distance = 0.0;  ///< blocks farther than this from the camera are freed, m (0 = keep all)
@@ -162,6 +164,11 @@ struct TsdfConfig {
     v.param("label_prior_other", label_prior_other, "",
             "mesh labels: a vertex whose wall/floor/ceiling label its surface rules out, and that no fitting class "
             "claims, is `other` (an object the network does not name, in front of the structure)");
+    v.param("label_prior_fringes", label_prior_fringes, "",
+            "mesh labels (last): an unlabelled vertex within label_prior_fringe_m along the mesh of labelled vertices of "
+            "its smooth segment takes the class most of their area shows among those its surface fits, ring by ring");
+    v.param("label_prior_fringe_m", label_prior_fringe_m, "m",
+            "label_prior_fringes: how far along the mesh from the labelled surface a class reaches", non_negative(1.0));
     v.param("drop_distance", drop_distance, "m", "free blocks farther than this from the camera (0 = never)", non_negative(1e6));
   }
   void validate() const {
