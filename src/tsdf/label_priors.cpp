@@ -446,6 +446,7 @@ void fill_fringes(const Surface& s, std::vector<ClassId>& labels, const std::vec
         votes[l] += s.g.vertex_area_m2[u];
         reach[l] = std::min(reach[l], d);
       });
+      if (std::all_of(votes.begin(), votes.end(), [](double w) { return w == 0.0; })) continue;  // nothing in reach
       std::array<bool, kNumClasses> ruled_out{};
       s.rule_out_around(v, ruled_out);
       for (int l = 1; l < kNumClasses; ++l)

@@ -46,11 +46,11 @@
 //    smooth segment whose labelled vertices show some classes, only those. A surface seen in few
 //    semantic frames, or from far, is named by its best evidence instead of left blank; a border
 //    vertex whose voxel also saw the neighbouring object keeps to its segment's classes.
-//  - other (after the segments): a vertex whose wall, floor or ceiling label its surface contradicts, that no
-//    rule relabelled and that lies off the planes (region_plane_m) of the regions decided wall,
-//    floor or ceiling, is `other`: an object the network does not name, in front of the
-//    structure (the network calls a shelf's clutter wall). At a junction of two structural
-//    planes it stays unlabelled.
+//  - other (after the segments): a vertex whose wall, floor or ceiling label its surface
+//    contradicts, that no rule relabelled and that lies off the planes (region_plane_m) of the
+//    regions decided wall, floor or ceiling, is `other`: an object the network does not name, in
+//    front of the structure (the network calls a shelf's clutter wall). At a junction of two
+//    structural planes it stays unlabelled.
 //  - fringes (last): what is still unlabelled within fringe_m along the mesh of labelled surface
 //    of its own smooth segment takes, ring by ring outward, the class with the most labelled
 //    neighbour area in that segment among those its surface fits (wall, floor, ceiling only

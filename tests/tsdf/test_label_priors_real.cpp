@@ -41,9 +41,9 @@ void expect_targets(const SemanticConsistency& c, const Targets& t, const std::s
 #ifndef SEMAP_LABEL_PRIORS_HEAVY
 // Every 10th frame of redkitchen (50 frames over the whole kitchen). Measured 2026-12-07 (2
 // cores): labelled 0.696, floor 0.905, wall 0.914, floor thickness 0.028 m (0.672 labelled before
-// the fringes rule; before the likely and `other` rules: 0.453, 0.898, 0.901, 0.027 m). The wall and thickness bounds are the issue's
-// targets; labelled area and floor agreement assert what is reached (the 0.85 and 0.90
-// are not on this slice).
+// the fringes rule; before the likely and `other` rules: 0.453, 0.898, 0.901, 0.027 m). The wall
+// and thickness bounds are the targets; labelled area and floor agreement assert what is
+// reached (the 0.85 and 0.90 are not on this slice).
 TEST(LabelPriorsReal, RedkitchenSliceIsConsistent) {
   SEMAP_REQUIRE_DATA(kitchen, "7scenes_redkitchen");
   SEMAP_REQUIRE_MODEL(semantic, "deeplabv3-mnv2-ade20k32-512.onnx");
