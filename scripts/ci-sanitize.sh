@@ -46,7 +46,13 @@ if [ "${SEMAP_ASAN:-1}" = 1 ]; then
   # aligned operator new that a C++17/20 client does not see, so the shared_ptr deleter instantiated
   # in our code frees them with the global sized delete. Every report of the first full run
   # (2026-11-30) was this one PCL-internal pair (SupervoxelClustering::getVoxels); nothing else.
-  export ASAN_OPTIONS=detect_leaks=1:halt_on_error=1:detect_stack_use_after_return=0:alloc_dealloc_mismatch=0
+  # intercept_tls_get_addr=0: up to LLVM 16 the runtime's __tls_get_addr interceptor takes a dynamic
+  # TLS block that happens to start 16 bytes past a page boundary for one with a pre-2.25 glibc
+  # header and reads the two words before it as its bounds; LeakSanitizer's tracer then dies at
+  # exit ("Tracer caught signal 11") after the test passed (google/sanitizers#1353). Which test it
+  # hits depends on the memory layout: after the UBSan change of cmake/ubsan-ignorelist.txt it hit
+  # two tests of one run, and both again in their rerun (2026-12-07).
+  export ASAN_OPTIONS=detect_leaks=1:halt_on_error=1:detect_stack_use_after_return=0:alloc_dealloc_mismatch=0:intercept_tls_get_addr=0
   export LSAN_OPTIONS=suppressions=$SUPP/lsan.supp:print_suppressions=0
   export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
   t0=$SECONDS
@@ -54,10 +60,9 @@ if [ "${SEMAP_ASAN:-1}" = 1 ]; then
   log=$ASAN_BUILD/Testing/Temporary/LastTest.log
   ctest_costs_restore "$ASAN_BUILD" asan
   if ! (cd "$ASAN_BUILD" && ctest -L "$labels" -LE heavy -E "$SAME_PATH_ONE_THREAD" --output-on-failure -j "$JOBS" --timeout 1200); then
-    # LeakSanitizer's own stop-the-world tracer sometimes segfaults at exit after a test passed
-    # (google/sanitizers#1353, open; seen here in two clean-clone runs, 2026-12-03, both times after a
-    # MapMerge test had passed; it passed 3 of 3 reruns).
-    # Only then the failed tests run once more; any other failure fails the step as it is.
+    # LeakSanitizer's own stop-the-world tracer segfaulted at exit after a test passed (seen in two
+    # clean-clone runs, 2026-12-03, after a MapMerge test; the cause above is now switched off):
+    # should it still happen, the failed tests run once more; any other failure fails the step.
     grep -q "LeakSanitizer has encountered a fatal error" "$log" || exit 1
     cp "$log" "$log.first"
     echo "semap sanitize: LeakSanitizer's tracer crashed; running the failed tests once more"
