@@ -5,7 +5,8 @@
 # its targets in, scripts/lib/asan-tree.sh), and the threading tests under ThreadSanitizer in
 # build-tsan/ (gcc): the segmentation hand-off (both busy policies), a threaded
 # pipeline run, a threaded run with real tracking (its loop-closure worker) and YOLO, and the
-# tracker's own threading tests. One build tree per sanitizer; each builds only what it runs.
+# tracker's own threading tests, JOBS processes at a time. One build tree per sanitizer; each
+# builds only what it runs.
 # SEMAP_ASAN=0 / SEMAP_TSAN=0 skip a part. Any sanitizer report fails: reports abort the
 # process (halt_on_error), and the ctest log is searched as well, since tests that run the
 # semap CLI only see its exit code.
@@ -77,20 +78,36 @@ if [ "${SEMAP_ASAN:-1}" = 1 ]; then
   echo "semap sanitize: ASan+UBSan on ${ASAN_FOLDERS[*]} passed with no report ($((SECONDS - t0)) s)"
 fi
 
+# The TSan tests, one "EXECUTABLE GTEST_FILTER" line per process: each test of test_pipeline a
+# process of its own, so that they run JOBS at a time (one process is mostly one core's work).
+# The longest first (the pipeline runs); the two one-thread runs above are left out here too.
+tsan_tests() {
+  build-tsan/tests/pipeline/test_pipeline --gtest_list_tests --gtest_filter='PipelineTest.*:-PipelineTest.CliRunAndConfigErrors:PipelineTest.OneThreadRunsAreByteIdentical:PipelineTest.RealtimeRunTakesTheRecordedSpanAndGivesTheSameMap' |
+    awk '/^[^ ]/ { suite = $1 } /^  / { print "build-tsan/tests/pipeline/test_pipeline " suite $1 }'
+  echo "build-tsan/tests/tracking/test_tracking_threads *"
+  echo "build-tsan/tests/pipeline/test_pipeline_models PipelineModels.ThreadedTrackedRunWithYolo"
+  echo "build-tsan/tests/pipeline/test_segmentation_schedule *"
+}
+run_tsan_test() {  # $1: executable, $2: gtest filter; its log in build-tsan/logs/
+  local log="build-tsan/logs/$(basename "$1")-${2//[^A-Za-z0-9]/_}.log"
+  "$1" --gtest_filter="$2" >"$log" 2>&1 && return 0
+  tail -n 80 "$log"; echo "semap sanitize: TSan test $1 --gtest_filter=$2 failed"; return 1
+}
+export -f run_tsan_test
+
 if [ "${SEMAP_TSAN:-1}" = 1 ]; then
   t0=$SECONDS
   cmake -S . -B build-tsan "${COMMON[@]}" -DSEMAP_SANITIZE=thread >/dev/null
   cmake --build build-tsan -j "$JOBS" --target test_pipeline test_pipeline_models test_segmentation_schedule \
     test_tracking_threads
+  echo "semap sanitize: TSan build in $((SECONDS - t0)) s"
   export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$SUPP/tsan.supp"
-  log=build-tsan/tsan.log
-  {
-    build-tsan/tests/pipeline/test_segmentation_schedule
-    build-tsan/tests/pipeline/test_pipeline --gtest_filter='PipelineTest.*:-PipelineTest.CliRunAndConfigErrors:PipelineTest.OneThreadRunsAreByteIdentical:PipelineTest.RealtimeRunTakesTheRecordedSpanAndGivesTheSameMap'
-    build-tsan/tests/pipeline/test_pipeline_models --gtest_filter='PipelineModels.ThreadedTrackedRunWithYolo'
-    build-tsan/tests/tracking/test_tracking_threads
-  } >"$log" 2>&1 || { tail -n 80 "$log"; echo "semap sanitize: TSan tests failed"; exit 1; }
-  fail_on_reports "$log"
-  echo "semap sanitize: TSan pipeline threading tests passed with no report ($((SECONDS - t0)) s)"
+  rm -rf build-tsan/logs && mkdir -p build-tsan/logs
+  t1=$SECONDS
+  tests=$(tsan_tests)
+  echo "$tests" | xargs -P "$JOBS" -L 1 bash -c 'run_tsan_test "$@"' _ || { echo "semap sanitize: TSan tests failed"; exit 1; }
+  cat build-tsan/logs/*.log >build-tsan/tsan.log
+  fail_on_reports build-tsan/tsan.log
+  echo "semap sanitize: TSan threading tests ($(echo "$tests" | wc -l) processes) passed with no report ($((SECONDS - t1)) s)"
 fi
 echo "semap sanitize: done in $((SECONDS - start)) s"
