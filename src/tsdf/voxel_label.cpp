@@ -36,6 +36,42 @@ void for_each_observed_voxel(const TsdfMap& map, const std::vector<Eigen::Vector
   });
 }
 
+/// The Bayesian bytes of the voxel containing `p`, or, when that voxel was never labelled, of the
+/// nearest labelled voxel along the surface normal (the sdf gradient) within `reach` voxels whose
+/// sdf is this surface's own distance there: a frame labels only the voxels within its label band
+/// of its own depth (METHODS A6), and where the fused surface lies farther from the few segmented
+/// frames' depths (far, noisy depth seen at a grazing angle) their labels sit a voxel or two off
+/// it, in front or behind. A voxel near another surface (a cup standing on the table) has a sdf
+/// that does not grow with the distance from this one and is not read. Null: none.
+const uint8_t* labelled_along_normal(CachedVoxelLookup& lookup, const Eigen::Vector3f& p, int reach, int stride) {
+  const TsdfMap& map = lookup.map();
+  const float voxel_m = static_cast<float>(map.config().voxel_size);
+  const auto labelled_at = [&](const Eigen::Vector3f& q, const float* expected_sdf) -> const uint8_t* {
+    const Block* block = nullptr;
+    int li = 0;
+    const VoxelIndex v = map.voxel_of_point(q);
+    const TsdfVoxel* voxel = lookup.observed(v, &block, &li);
+    if (!voxel) return nullptr;
+    const uint8_t* bayes = &block->bayes[static_cast<size_t>(li) * stride];
+    if (bayes[0] == 0) return nullptr;
+    if (expected_sdf && std::fabs(voxel->sdf() - *expected_sdf) > 0.5f * voxel_m) return nullptr;
+    return bayes;
+  };
+  if (const uint8_t* own = labelled_at(p, nullptr); own || reach <= 0) return own;
+  float sdf = 0.0f;
+  Eigen::Vector3f gradient;
+  if (!interpolate_sdf(lookup, p, sdf, &gradient) || !(gradient.norm() > 1e-6f)) return nullptr;
+  const Eigen::Vector3f normal = gradient.normalized();
+  for (int k = 1; k <= reach; ++k)
+    for (const float side : {1.0f, -1.0f}) {
+      const Eigen::Vector3f q = p + side * float(k) * voxel_m * normal;
+      // This surface's distance at the voxel's centre (the sdf grows along the normal).
+      const float expected = sdf + normal.dot(map.voxel_centre(map.voxel_of_point(q)) - p);
+      if (const uint8_t* found = labelled_at(q, &expected)) return found;
+    }
+  return nullptr;
+}
+
 }  // namespace
 
 VoxelLabelRule::VoxelLabelRule(const TsdfMap& map)
@@ -61,8 +97,14 @@ SurfaceLabelEvidence::SurfaceLabelEvidence(const TsdfMap& map, const std::vector
       min_odds_(min_lead_odds(map)) {
   if (!map.has_bayes_layer()) return;
   bytes_.assign(points.size() * stride_, 0);  // all zero = never labelled
-  for_each_observed_voxel(map, points, [&](size_t i, const Block& block, int li) {
-    std::copy_n(&block.bayes[static_cast<size_t>(li) * stride_], stride_, &bytes_[i * stride_]);
+  // Never beyond the truncation: no frame's label lands farther from its depth.
+  const int reach = static_cast<int>(
+      std::floor(std::min(map.config().label_evidence_reach_voxels, map.config().truncation_voxels)));
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    CachedVoxelLookup lookup(map);
+    for (size_t i = r.begin(); i < r.end(); ++i)
+      if (const uint8_t* bayes = labelled_along_normal(lookup, points[i], reach, stride_))
+        std::copy_n(bayes, stride_, &bytes_[i * stride_]);
   });
 }
 

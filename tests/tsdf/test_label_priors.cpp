@@ -357,6 +357,57 @@ TEST(LabelPriors, StructureRuledOutWithNothingElseSeenIsOther) {
   EXPECT_GE(s.other_filled, counter);
 }
 
+/// A fused floor at z = 0.5 m (sdf = height above it, observed within the truncation) whose
+/// segmented frames' labels landed `offset_voxels` above it: their depth was nearer than the
+/// fused surface, so the vertices' own voxels were never labelled (far, noisy depth). With
+/// `another_surface` the labelled voxels lie on a surface of their own (sdf 0 there: a box
+/// standing on the floor), not on the floor's distance field.
+struct FloorWithLabelsAbove {
+  TsdfMap map;
+  std::vector<Eigen::Vector3f> surface;  ///< points on the fused floor
+  FloorWithLabelsAbove(double reach_voxels, int offset_voxels, bool another_surface = false)
+      : map(config(reach_voxels)) {
+    const float s = static_cast<float>(map.config().voxel_size), z0 = 0.5f + 0.3f * s;
+    const float c = static_cast<float>(map.config().bayes_default_confidence);
+    for (int i = 0; i < 20; ++i)
+      for (int j = 0; j < 20; ++j)
+        for (int k = -8; k <= 8; ++k) {
+          const VoxelIndex v = map.voxel_of_point(Eigen::Vector3f((i + 0.5f) * s, (j + 0.5f) * s, z0 + k * s));
+          Block& block = map.allocate_block(block_of_voxel(v));
+          TsdfVoxel& voxel = block.voxels[local_index(v)];
+          voxel.weight_q = 10;
+          voxel.set_sdf(map.voxel_centre(v).z() - z0);
+          if (k != offset_voxels) continue;
+          if (another_surface) voxel.set_sdf(0.0f);
+          uint8_t* bayes = &block.bayes[static_cast<size_t>(local_index(v)) * map.bayes().bytes_per_voxel()];
+          for (int frame = 0; frame < 6; ++frame)
+            map.bayes().update(bayes, ClassDistribution::from_label(id(Label::kFloor), c, map.config().bayes_confusion_classes));
+        }
+    for (int i = 2; i < 18; ++i)
+      for (int j = 2; j < 18; ++j) surface.emplace_back((i + 0.25f) * s, (j + 0.75f) * s, z0);
+  }
+  static TsdfConfig config(double reach_voxels) {
+    TsdfConfig c;
+    c.label_evidence_reach_voxels = reach_voxels;
+    return c;
+  }
+  double share_with_evidence_of(Label l) const {
+    const SurfaceLabelEvidence evidence(map, surface);
+    size_t n = 0;
+    for (size_t i = 0; i < surface.size(); ++i) n += evidence.label_excluding(i, {}) == id(l);
+    return double(n) / double(surface.size());
+  }
+};
+
+TEST(LabelPriors, LabelsAFewVoxelsOffTheFusedSurfaceAreReadAlongItsNormal) {
+  EXPECT_GT(FloorWithLabelsAbove(4.0, 3).share_with_evidence_of(Label::kFloor), 0.99);
+  EXPECT_GT(FloorWithLabelsAbove(4.0, -3).share_with_evidence_of(Label::kFloor), 0.99);  // behind it too
+  EXPECT_LT(FloorWithLabelsAbove(0.0, 3).share_with_evidence_of(Label::kFloor), 0.01);   // its own voxel only
+  EXPECT_LT(FloorWithLabelsAbove(2.0, 3).share_with_evidence_of(Label::kFloor), 0.01);   // out of reach
+  EXPECT_LT(FloorWithLabelsAbove(8.0, 6).share_with_evidence_of(Label::kFloor), 0.01);   // beyond the truncation
+  EXPECT_LT(FloorWithLabelsAbove(4.0, 3, true).share_with_evidence_of(Label::kFloor), 0.01);  // another surface's
+}
+
 TEST(LabelPriors, FringesCloseSeamsWithinTheirReachAndStopAtACrease) {
   // A table top (0.75 m above the floor, 2 cm spacing) meeting a wall at x = 0. The voxels left
   // a seam where they meet: two profile vertices either side of the junction and the junction

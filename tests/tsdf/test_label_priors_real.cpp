@@ -39,11 +39,27 @@ void expect_targets(const SemanticConsistency& c, const Targets& t, const std::s
 }
 
 #ifndef SEMAP_LABEL_PRIORS_HEAVY
-// Every 10th frame of redkitchen (50 frames over the whole kitchen). Measured 2026-12-07 (2
-// cores): labelled 0.696, floor 0.905, wall 0.914, floor thickness 0.028 m (0.672 labelled before
-// the fringes rule; before the likely and `other` rules: 0.453, 0.898, 0.901, 0.027 m). The wall
-// and thickness bounds are the targets; labelled area and floor agreement assert what is
-// reached (the 0.85 and 0.90 are not on this slice).
+// The first 150 frames of redkitchen as recorded (5 s at 30 Hz: the counter, the table, the
+// floor in front of them), the way semap maps any recording, held to the targets.
+// Measured 2026-12-08 (2 cores): labelled 0.930, floor 0.960, wall 0.964, floor thickness
+// 0.024 m (semap run --max-frames 150 before labels were read along the normal: 0.906, 0.954,
+// 0.964, 0.024 m). Other 150-frame windows of the same recording, measured before that change and
+// not asserted: frames 175-324 0.93 / 0.88 / 0.94 / 0.029 m, 350-499 0.92 / 0.91 / 0.95 / 0.026 m.
+TEST(LabelPriorsReal, RedkitchenFirstFramesMeetTheTargets) {
+  SEMAP_REQUIRE_DATA(kitchen, "7scenes_redkitchen");
+  SEMAP_REQUIRE_MODEL(semantic, "deeplabv3-mnv2-ade20k32-512.onnx");
+  SEMAP_REQUIRE_MODEL(instance, "yolov8n-seg-320.onnx");
+  const test::TempDir tmp("semap_label_priors");
+  test::write_sequence_slice(kitchen, {.last = 149}, tmp / "slice");
+  expect_targets(map_and_check(tmp / "slice", tmp), {0.85, 0.90, 0.85, 0.10}, "redkitchen frames 0-149");
+}
+
+// Every 10th frame of redkitchen (50 frames over the whole kitchen, each far from the last: few
+// views of each surface). Measured 2026-12-08 (2 cores): labelled 0.711, floor 0.905, wall 0.915,
+// floor thickness 0.028 m (0.696 before labels were read along the normal, 0.672 before the
+// fringes rule; before the likely and `other` rules: 0.453, 0.898, 0.901, 0.027 m). The wall and
+// thickness bounds are the targets; labelled area and floor agreement assert what is
+// reached (the 0.85 and 0.90 are not on this sparse slice).
 TEST(LabelPriorsReal, RedkitchenSliceIsConsistent) {
   SEMAP_REQUIRE_DATA(kitchen, "7scenes_redkitchen");
   SEMAP_REQUIRE_MODEL(semantic, "deeplabv3-mnv2-ade20k32-512.onnx");
@@ -53,19 +69,19 @@ TEST(LabelPriorsReal, RedkitchenSliceIsConsistent) {
   expect_targets(map_and_check(tmp / "slice", tmp), {0.65, 0.85, 0.85, 0.10}, "redkitchen k=10");
 }
 #else
-// Measured 2026-12-07 (`semap run DATASET --out O` + `semap eval consistency O`): redkitchen
-// labelled 0.870, floor 0.948, wall 0.940, floor thickness 0.043 m; fr1_rpy 0.796, 0.903,
-// 0.923, 0.047 m (before the fringes rule 0.845 and 0.787 labelled; before the likely and
-// `other` rules 0.613 and 0.418). Redkitchen is held to the targets; fr1_rpy's labelled
-// area (0.85) is not reached and its floor agreement is at the 0.90: its bounds assert
-// what is reached.
+// Measured 2026-12-08 (`semap run DATASET --out O` + `semap eval consistency O`, 2 cores):
+// redkitchen labelled 0.887, floor 0.948, wall 0.940, floor thickness 0.043 m; fr1_rpy 0.823,
+// 0.903, 0.924, 0.047 m (before labels were read along the normal 0.870 and 0.796 labelled; before
+// the fringes rule 0.845 and 0.787; before the likely and `other` rules 0.613 and 0.418).
+// Redkitchen is held to the targets; fr1_rpy's labelled area (0.85) is not reached and its
+// floor agreement is at the 0.90: its bounds assert what is reached.
 TEST(LabelPriorsReal, FullSequencesReachTheTargets) {
   struct Sequence {
     const char* name;
     Targets targets;
   };
   for (const Sequence& s : {Sequence{"7scenes_redkitchen", {0.85, 0.90, 0.85, 0.10}},
-                            Sequence{"tum_fr1_rpy", {0.75, 0.88, 0.88, 0.10}}}) {
+                            Sequence{"tum_fr1_rpy", {0.80, 0.88, 0.88, 0.10}}}) {
     SEMAP_REQUIRE_DATA(dataset, s.name);
     SEMAP_REQUIRE_MODEL(semantic, "deeplabv3-mnv2-ade20k32-512.onnx");
     const test::TempDir tmp("semap_label_priors_heavy");

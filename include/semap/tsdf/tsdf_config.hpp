@@ -54,6 +54,10 @@ struct TsdfConfig {
   /// depth scatters beyond 2 voxels (Kinect v1 at 4 m: sigma 2.6 cm), and its fused zero crossing
   /// then missed most frames' labels (TUM fr1_rpy: 21 % of the mesh area never labelled).
   double label_band_sigmas = 3.0;
+  /// A mesh vertex whose voxel was never labelled reads the nearest labelled voxel along its
+  /// normal within this many voxels, at most the truncation (for the mesh-time rules,
+  /// tsdf/voxel_label.hpp; 0 = its own voxel only).
+  double label_evidence_reach_voxels = 4.0;
   DepthNoiseModel depth_noise;     ///< the sensor's depth noise (label band)
 
   // Colour.
@@ -123,6 +127,9 @@ struct TsdfConfig {
     v.param("label_band_sigmas", label_band_sigmas, "",
             "... or <= this many depth-noise sigmas of the measured depth (far, noisy depth), at most the truncation",
             non_negative(100.0));
+    v.param("label_evidence_reach_voxels", label_evidence_reach_voxels, "voxels",
+            "a mesh vertex whose voxel was never labelled reads the nearest labelled voxel along its normal within this reach, at most the truncation (mesh-time label rules; 0: its own voxel only)",
+            {0.0, 8.0});
     depth_noise.visit(v);
     v.param("colour_layer", colour_layer, "", "keep an RGB colour per voxel");
     v.param("mesh_colour", mesh_colour, kMeshColourNames,
