@@ -39,6 +39,16 @@ void expect_targets(const SemanticConsistency& c, const Targets& t, const std::s
 }
 
 #ifndef SEMAP_LABEL_PRIORS_HEAVY
+/// Maps a slice of redkitchen with the default models and checks its consistency.
+void expect_redkitchen_slice(const test::SliceSpec& spec, const Targets& t, const std::string& what) {
+  SEMAP_REQUIRE_DATA(kitchen, "7scenes_redkitchen");
+  SEMAP_REQUIRE_MODEL(semantic, "deeplabv3-mnv2-ade20k32-512.onnx");
+  SEMAP_REQUIRE_MODEL(instance, "yolov8n-seg-320.onnx");
+  const test::TempDir tmp("semap_label_priors");
+  test::write_sequence_slice(kitchen, spec, tmp / "slice");
+  expect_targets(map_and_check(tmp / "slice", tmp), t, what);
+}
+
 // The first 150 frames of redkitchen as recorded (5 s at 30 Hz: the counter, the table, the
 // floor in front of them), the way semap maps any recording, held to the targets.
 // Measured 2026-12-08 (2 cores): labelled 0.930, floor 0.960, wall 0.964, floor thickness
@@ -46,12 +56,7 @@ void expect_targets(const SemanticConsistency& c, const Targets& t, const std::s
 // 0.964, 0.024 m). Other 150-frame windows of the same recording, measured before that change and
 // not asserted: frames 175-324 0.93 / 0.88 / 0.94 / 0.029 m, 350-499 0.92 / 0.91 / 0.95 / 0.026 m.
 TEST(LabelPriorsReal, RedkitchenFirstFramesMeetTheTargets) {
-  SEMAP_REQUIRE_DATA(kitchen, "7scenes_redkitchen");
-  SEMAP_REQUIRE_MODEL(semantic, "deeplabv3-mnv2-ade20k32-512.onnx");
-  SEMAP_REQUIRE_MODEL(instance, "yolov8n-seg-320.onnx");
-  const test::TempDir tmp("semap_label_priors");
-  test::write_sequence_slice(kitchen, {.last = 149}, tmp / "slice");
-  expect_targets(map_and_check(tmp / "slice", tmp), {0.85, 0.90, 0.85, 0.10}, "redkitchen frames 0-149");
+  expect_redkitchen_slice({.last = 149}, {0.85, 0.90, 0.85, 0.10}, "redkitchen frames 0-149");
 }
 
 // Every 10th frame of redkitchen (50 frames over the whole kitchen, each far from the last: few
@@ -61,12 +66,7 @@ TEST(LabelPriorsReal, RedkitchenFirstFramesMeetTheTargets) {
 // thickness bounds are the targets; labelled area and floor agreement assert what is
 // reached (the 0.85 and 0.90 are not on this sparse slice).
 TEST(LabelPriorsReal, RedkitchenSliceIsConsistent) {
-  SEMAP_REQUIRE_DATA(kitchen, "7scenes_redkitchen");
-  SEMAP_REQUIRE_MODEL(semantic, "deeplabv3-mnv2-ade20k32-512.onnx");
-  SEMAP_REQUIRE_MODEL(instance, "yolov8n-seg-320.onnx");
-  const test::TempDir tmp("semap_label_priors");
-  test::write_sequence_slice(kitchen, {.step = 10}, tmp / "slice");
-  expect_targets(map_and_check(tmp / "slice", tmp), {0.65, 0.85, 0.85, 0.10}, "redkitchen k=10");
+  expect_redkitchen_slice({.step = 10}, {0.65, 0.85, 0.85, 0.10}, "redkitchen k=10");
 }
 #else
 // Measured 2026-12-08 (`semap run DATASET --out O` + `semap eval consistency O`, 2 cores):
