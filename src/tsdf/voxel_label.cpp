@@ -37,12 +37,12 @@ void for_each_observed_voxel(const TsdfMap& map, const std::vector<Eigen::Vector
 }
 
 /// The Bayesian bytes of the voxel containing `p`, or, when that voxel was never labelled, of the
-/// nearest labelled voxel along the surface normal (the sdf gradient) within `reach` voxels whose
-/// sdf is this surface's own distance there: a frame labels only the voxels within its label band
-/// of its own depth (METHODS A6), and where the fused surface lies farther from the few segmented
-/// frames' depths (far, noisy depth seen at a grazing angle) their labels sit a voxel or two off
-/// it, in front or behind. A voxel near another surface (a cup standing on the table) has a sdf
-/// that does not grow with the distance from this one and is not read. Null: none.
+/// nearest labelled voxel along the surface normal (the sdf gradient) within `reach` voxels that
+/// lies no nearer another surface than this one: a frame labels only the voxels within its label
+/// band of its own depth (METHODS A6), and where the fused surface lies farther from the few
+/// segmented frames' depths (far, noisy depth seen at a grazing angle) their labels sit a voxel or
+/// two off it, in front or behind. A voxel beside another surface (a cup standing on the table)
+/// has a sdf, on this surface's side, short of its distance from this one, and is not read. Null: none.
 const uint8_t* labelled_along_normal(CachedVoxelLookup& lookup, const Eigen::Vector3f& p, int reach, int stride) {
   const TsdfMap& map = lookup.map();
   const float voxel_m = static_cast<float>(map.config().voxel_size);
@@ -54,7 +54,9 @@ const uint8_t* labelled_along_normal(CachedVoxelLookup& lookup, const Eigen::Vec
     if (!voxel) return nullptr;
     const uint8_t* bayes = &block->bayes[static_cast<size_t>(li) * stride];
     if (bayes[0] == 0) return nullptr;
-    if (expected_sdf && std::fabs(voxel->sdf() - *expected_sdf) > 0.5f * voxel_m) return nullptr;
+    // Nearer another surface than this one: its distance (on this surface's side) falls short.
+    if (expected_sdf && std::copysign(1.0f, *expected_sdf) * voxel->sdf() < std::fabs(*expected_sdf) - 0.5f * voxel_m)
+      return nullptr;
     return bayes;
   };
   if (const uint8_t* own = labelled_at(p, nullptr); own || reach <= 0) return own;

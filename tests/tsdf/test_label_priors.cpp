@@ -359,13 +359,13 @@ TEST(LabelPriors, StructureRuledOutWithNothingElseSeenIsOther) {
 
 /// A fused floor at z = 0.5 m (sdf = height above it, observed within the truncation) whose
 /// segmented frames' labels landed `offset_voxels` above it: their depth was nearer than the
-/// fused surface, so the vertices' own voxels were never labelled (far, noisy depth). With
-/// `another_surface` the labelled voxels lie on a surface of their own (sdf 0 there: a box
-/// standing on the floor), not on the floor's distance field.
+/// fused surface, so the vertices' own voxels were never labelled (far, noisy depth). The
+/// labelled voxels' sdf is `labelled_sdf_scale` times their distance from the floor: 0 puts them
+/// on a surface of their own (a box standing on the floor), above 1 is noise on the far side.
 struct FloorWithLabelsAbove {
   TsdfMap map;
   std::vector<Eigen::Vector3f> surface;  ///< points on the fused floor
-  FloorWithLabelsAbove(double reach_voxels, int offset_voxels, bool another_surface = false)
+  FloorWithLabelsAbove(double reach_voxels, int offset_voxels, float labelled_sdf_scale = 1.0f)
       : map(config(reach_voxels)) {
     const float s = static_cast<float>(map.config().voxel_size), z0 = 0.5f + 0.3f * s;
     const float c = static_cast<float>(map.config().bayes_default_confidence);
@@ -378,7 +378,7 @@ struct FloorWithLabelsAbove {
           voxel.weight_q = 10;
           voxel.set_sdf(map.voxel_centre(v).z() - z0);
           if (k != offset_voxels) continue;
-          if (another_surface) voxel.set_sdf(0.0f);
+          voxel.set_sdf(labelled_sdf_scale * voxel.sdf());
           uint8_t* bayes = &block.bayes[static_cast<size_t>(local_index(v)) * map.bayes().bytes_per_voxel()];
           for (int frame = 0; frame < 6; ++frame)
             map.bayes().update(bayes, ClassDistribution::from_label(id(Label::kFloor), c, map.config().bayes_confusion_classes));
@@ -405,7 +405,10 @@ TEST(LabelPriors, LabelsAFewVoxelsOffTheFusedSurfaceAreReadAlongItsNormal) {
   EXPECT_LT(FloorWithLabelsAbove(0.0, 3).share_with_evidence_of(Label::kFloor), 0.01);   // its own voxel only
   EXPECT_LT(FloorWithLabelsAbove(2.0, 3).share_with_evidence_of(Label::kFloor), 0.01);   // out of reach
   EXPECT_LT(FloorWithLabelsAbove(8.0, 6).share_with_evidence_of(Label::kFloor), 0.01);   // beyond the truncation
-  EXPECT_LT(FloorWithLabelsAbove(4.0, 3, true).share_with_evidence_of(Label::kFloor), 0.01);  // another surface's
+  EXPECT_LT(FloorWithLabelsAbove(4.0, 3, 0.0f).share_with_evidence_of(Label::kFloor), 0.01);  // another surface's
+  EXPECT_LT(FloorWithLabelsAbove(4.0, 3, 0.5f).share_with_evidence_of(Label::kFloor), 0.01);  // nearer another one
+  EXPECT_GT(FloorWithLabelsAbove(4.0, 3, 1.5f).share_with_evidence_of(Label::kFloor), 0.99);  // farther: noise
+  EXPECT_GT(FloorWithLabelsAbove(4.0, -3, 1.5f).share_with_evidence_of(Label::kFloor), 0.99);
 }
 
 TEST(LabelPriors, FringesCloseSeamsWithinTheirReachAndStopAtACrease) {
