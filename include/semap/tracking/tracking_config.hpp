@@ -231,9 +231,11 @@ struct TrackingConfig {
   /// surface along its pixel rays (its own depth where the model has none yet), when the
   /// pipeline hands the tracker a model view (Tracker::set_model_view); the frames tracked
   /// against it register to the model's projected point cloud instead of one depth image.
-  /// Off by default: on the shared sequences the fused surface disagrees with a new keyframe's
-  /// depth by ~2 cm (median) during fast rotation, and semap run measured worse with it
-  /// (fr1_rpy 1.46 -> 1.94 cm ATE, 2.03 -> 2.32 deg/s; redkitchen 3.17 -> 4.41 cm).
+  /// Off by default: `semap run --segmenter none` (2026-12-08, 2 threads) measured redkitchen
+  /// better with it (ATE 3.17 -> 2.83 cm, RPE 1.84 -> 1.83 deg/s) but fr1_rpy worse (1.46 -> 1.84
+  /// cm, 2.03 -> 2.15 deg/s: during fast rotation the fused surface is smeared), at 46 instead of
+  /// 67 fps (the ray casts). The keyframe's ICP residual against the model does not tell the two
+  /// apart (median 1.5 cm on both), so there is no per-keyframe choice yet.
   bool model_keyframes = false;
 
   // --- A3 random ferns ---
