@@ -35,7 +35,9 @@ class VoxelLabelRule {
 class SurfaceLabelEvidence {
  public:
   SurfaceLabelEvidence() = default;
-  /// Copies the Bayesian layer's bytes at each point (TBB); the map must not change meanwhile.
+  /// Copies the Bayesian layer's bytes at each point, or, where its voxel was never labelled, of
+  /// the nearest labelled voxel along the normal within tsdf.label_evidence_reach_voxels that lies
+  /// no nearer another surface (TBB); the map must not change meanwhile.
   SurfaceLabelEvidence(const TsdfMap& map, const std::vector<Eigen::Vector3f>& points);
   bool empty() const { return bytes_.empty(); }
   size_t size() const { return stride_ > 0 ? bytes_.size() / stride_ : 0; }
