@@ -46,10 +46,9 @@ void for_each_observed_voxel(const TsdfMap& map, const std::vector<Eigen::Vector
 const uint8_t* labelled_along_normal(CachedVoxelLookup& lookup, const Eigen::Vector3f& p, int reach, int stride) {
   const TsdfMap& map = lookup.map();
   const float voxel_m = static_cast<float>(map.config().voxel_size);
-  const auto labelled_at = [&](const Eigen::Vector3f& q, const float* expected_sdf) -> const uint8_t* {
+  const auto labelled_at = [&](const VoxelIndex& v, const float* expected_sdf) -> const uint8_t* {
     const Block* block = nullptr;
     int li = 0;
-    const VoxelIndex v = map.voxel_of_point(q);
     const TsdfVoxel* voxel = lookup.observed(v, &block, &li);
     if (!voxel) return nullptr;
     const uint8_t* bayes = &block->bayes[static_cast<size_t>(li) * stride];
@@ -59,17 +58,17 @@ const uint8_t* labelled_along_normal(CachedVoxelLookup& lookup, const Eigen::Vec
       return nullptr;
     return bayes;
   };
-  if (const uint8_t* own = labelled_at(p, nullptr); own || reach <= 0) return own;
+  if (const uint8_t* own = labelled_at(map.voxel_of_point(p), nullptr); own || reach <= 0) return own;
   float sdf = 0.0f;
   Eigen::Vector3f gradient;
   if (!interpolate_sdf(lookup, p, sdf, &gradient) || !(gradient.norm() > 1e-6f)) return nullptr;
   const Eigen::Vector3f normal = gradient.normalized();
   for (int k = 1; k <= reach; ++k)
     for (const float side : {1.0f, -1.0f}) {
-      const Eigen::Vector3f q = p + side * float(k) * voxel_m * normal;
+      const VoxelIndex v = map.voxel_of_point(p + side * float(k) * voxel_m * normal);
       // This surface's distance at the voxel's centre (the sdf grows along the normal).
-      const float expected = sdf + normal.dot(map.voxel_centre(map.voxel_of_point(q)) - p);
-      if (const uint8_t* found = labelled_at(q, &expected)) return found;
+      const float expected = sdf + normal.dot(map.voxel_centre(v) - p);
+      if (const uint8_t* found = labelled_at(v, &expected)) return found;
     }
   return nullptr;
 }
