@@ -29,4 +29,11 @@ Pose orthonormalized(const Pose& pose) {
   return out;
 }
 
+Pose interpolate_pose(const Pose& a, const Pose& b, double s) {
+  Pose out = Pose::Identity();
+  out.linear() = Eigen::Quaterniond(a.linear()).slerp(s, Eigen::Quaterniond(b.linear())).normalized().toRotationMatrix();
+  out.translation() = (1 - s) * a.translation() + s * b.translation();
+  return out;
+}
+
 }  // namespace semap

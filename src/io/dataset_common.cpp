@@ -88,14 +88,7 @@ std::optional<Pose> pose_at(const Trajectory& trajectory, double t, double max_d
   if (has_next && has_prev) {
     const StampedPose& a = *std::prev(next);
     const StampedPose& b = *next;
-    const double s = (t - a.timestamp) / (b.timestamp - a.timestamp);
-    Pose pose = Pose::Identity();
-    pose.linear() = Eigen::Quaterniond(a.T_world_camera.linear())
-                        .slerp(s, Eigen::Quaterniond(b.T_world_camera.linear()))
-                        .normalized()
-                        .toRotationMatrix();
-    pose.translation() = (1 - s) * a.T_world_camera.translation() + s * b.T_world_camera.translation();
-    return pose;
+    return interpolate_pose(a.T_world_camera, b.T_world_camera, (t - a.timestamp) / (b.timestamp - a.timestamp));
   }
   if (has_next) return next->T_world_camera;
   if (has_prev) return std::prev(next)->T_world_camera;

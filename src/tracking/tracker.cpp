@@ -12,6 +12,7 @@
 #include "tracking/depth_repair.hpp"
 #include "tracking/keyframe_database.hpp"
 #include "tracking/loop_closer.hpp"
+#include "tracking/lost_frame_poses.hpp"
 #include "tracking/odometry.hpp"
 #include "tracking/parallel.hpp"
 #include "tracking/tracker_state.hpp"
@@ -44,6 +45,7 @@ struct FrameRecord {
   double timestamp = 0.0;
   int reference = 0;
   Pose T_ref_frame = Pose::Identity();
+  bool lost = false;  ///< held at the last verified pose (lost_frame_poses.hpp)
 };
 
 /// What track() derives from a frame before registering it.
@@ -280,7 +282,7 @@ struct Tracker::Impl {
 
   void record_frame(const Frame& frame, const Pose& T_ref_frame, bool is_lost) {
     std::lock_guard<std::mutex> lock(frames_mutex);
-    frames.push_back({frame.index, frame.timestamp, reference, T_ref_frame});
+    frames.push_back({frame.index, frame.timestamp, reference, T_ref_frame, is_lost});
     ++counters.frames;
     if (is_lost) {
       ++counters.lost_frames;
@@ -419,10 +421,14 @@ struct Tracker::Impl {
       records = frames;
     }
     const std::map<int, Pose> poses = loop.all_poses();
-    Trajectory out;
-    out.reserve(records.size());
+    std::vector<TrajectorySample> samples;
+    samples.reserve(records.size());
     for (const auto& f : records)
-      if (f.reference >= 0) out.push_back({f.timestamp, orthonormalized(poses.at(f.reference) * f.T_ref_frame)});
+      if (f.reference >= 0) samples.push_back({f.timestamp, orthonormalized(poses.at(f.reference) * f.T_ref_frame), !f.lost});
+    fill_lost_poses(samples, cfg.lost_pose_max_gap_s);
+    Trajectory out;
+    out.reserve(samples.size());
+    for (const TrajectorySample& s : samples) out.push_back({s.timestamp, s.T_world_camera});
     return out;
   }
 };

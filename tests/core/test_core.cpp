@@ -40,6 +40,21 @@ TEST(Pose, ValidityChecks) {
   EXPECT_NEAR(rotation_angle(pose_from_tq({0, 0, 0}, Eigen::Quaterniond(Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitZ())))), 0.5, 1e-12);
 }
 
+TEST(Pose, InterpolationFollowsTheShortestRotationAndTheStraightLine) {
+  const auto about_z = [](double rad) { return Eigen::Quaterniond(Eigen::AngleAxisd(rad, Eigen::Vector3d::UnitZ())); };
+  const Pose a = pose_from_tq({0, 0, 0}, about_z(0.2)), b = pose_from_tq({2, -4, 1}, about_z(1.0));
+  const Pose quarter = interpolate_pose(a, b, 0.25);
+  EXPECT_TRUE(is_valid_pose(quarter));
+  EXPECT_NEAR((quarter.translation() - Eigen::Vector3d(0.5, -1.0, 0.25)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(rotation_angle(a.inverse() * quarter), 0.2, 1e-9);
+  EXPECT_TRUE(interpolate_pose(a, b, 0.0).isApprox(a, 1e-12));
+  EXPECT_TRUE(interpolate_pose(a, b, 1.0).isApprox(b, 1e-12));
+  // Past b along the same rotation axis and line.
+  const Pose beyond = interpolate_pose(a, b, 1.5);
+  EXPECT_NEAR(rotation_angle(b.inverse() * beyond), 0.4, 1e-9);
+  EXPECT_NEAR((beyond.translation() - Eigen::Vector3d(3, -6, 1.5)).norm(), 0.0, 1e-12);
+}
+
 TEST(Labels, NamesRoundTripAndUnknownIsOther) {
   for (int c = 0; c < kNumClasses; ++c) {
     const auto back = class_from_name(class_name(static_cast<ClassId>(c)));

@@ -28,4 +28,8 @@ double rotation_angle(const Pose& pose);
 /// Orthonormalises the rotation part (removes numerical drift after many compositions).
 Pose orthonormalized(const Pose& pose);
 
+/// The pose a fraction s of the way from a to b: rotation by slerp, translation linearly.
+/// s outside [0, 1] extrapolates along the same path (while the rotation stays below 180 deg).
+Pose interpolate_pose(const Pose& a, const Pose& b, double s);
+
 }  // namespace semap

@@ -209,6 +209,10 @@ struct TrackingConfig {
   double loss_min_overlap = 0.20;      ///< fewer than this fraction of source points matched = lost
   double loss_max_translation_jump = 0.30;  ///< without trusted feature support: a jump from the motion prior above this = lost, metres
   double loss_max_rotation_jump_deg = 30.0; ///< same for rotation, degrees
+  /// The trajectory's pose of a lost frame (issue 42): interpolated between the verified frames
+  /// before and after it when they are at most this far apart in time; else (and at 0) the last
+  /// verified pose, as track() reports it. Seconds.
+  double lost_pose_max_gap_s = 5.0;
   VerificationParams verify;          ///< checks a registration must pass (issue 42)
   int relocalisation_candidates = 3;   ///< keyframes (by fern similarity) tried when lost
   int relocalisation_recent = 2;       ///< plus this many most recent keyframes
@@ -279,6 +283,7 @@ struct TrackingConfig {
     v.param("loss_min_overlap", loss_min_overlap, "", "matched fraction below this means lost", {0.0, 1.0});
     v.param("loss_max_translation_jump", loss_max_translation_jump, "m", "jump from the motion prior that an estimate without trusted features may not make", positive(100.0));
     v.param("loss_max_rotation_jump_deg", loss_max_rotation_jump_deg, "deg", "same for rotation", positive(180.0));
+    v.param("lost_pose_max_gap_s", lost_pose_max_gap_s, "s", "a lost frame's trajectory pose is interpolated between the verified frames around it when they are at most this far apart in time (0: held at the last verified pose)", non_negative(3600.0));
     v.section("verify", "checks each registration must pass before it is trusted (issue 42)", [&](ParamVisitor& s) { verify.visit(s); });
     v.param("relocalisation_candidates", relocalisation_candidates, "", "keyframes (by fern similarity) tried when relocalising", {0, 1000});
     v.param("relocalisation_recent", relocalisation_recent, "", "most recent keyframes also tried when relocalising", {0, 1000});
