@@ -53,5 +53,19 @@ TEST(LostFramePoses, LostFramesBeforeTheFirstVerifiedOneStayHeld) {
   EXPECT_TRUE(s[0].T_world_camera.isApprox(at(7, 0)));
 }
 
+TEST(LostFramePoses, EachGapIsInterpolatedBetweenItsOwnVerifiedFrames) {
+  // Verified at t = 0, 10, 20 (x = 0, 1, 5); two gaps of 999 lost frames held at the last pose.
+  std::vector<TrajectorySample> s;
+  for (int k = 0; k <= 2000; ++k) {
+    const bool verified = k % 1000 == 0;
+    const double held_x = k < 1000 ? 0 : k < 2000 ? 1 : 5;
+    s.push_back({k / 100.0, at(verified ? held_x : (k < 1000 ? 0 : 1), 0), verified});
+  }
+  fill_lost_poses(s, 10.0);
+  EXPECT_NEAR(s[500].T_world_camera.translation().x(), 0.5, 1e-9);
+  EXPECT_NEAR(s[1500].T_world_camera.translation().x(), 3.0, 1e-9);
+  EXPECT_NEAR(s[1999].T_world_camera.translation().x(), 1.0 + 4.0 * 0.999, 1e-9);
+}
+
 }  // namespace
 }  // namespace semap
