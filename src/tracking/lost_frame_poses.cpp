@@ -1,5 +1,6 @@
 #include "tracking/lost_frame_poses.hpp"
 
+#include <algorithm>
 #include <optional>
 
 namespace semap {
@@ -23,7 +24,7 @@ void fill_lost_poses(std::vector<TrajectorySample>& samples, double max_gap_s) {
     if (!previous || !b) continue;  // before the first or after the last verified one: held
     const double t_a = samples[*previous].timestamp, t_b = samples[*b].timestamp;
     if (t_b <= t_a || t_b - t_a > max_gap_s) continue;
-    const double s = (samples[i].timestamp - t_a) / (t_b - t_a);
+    const double s = std::clamp((samples[i].timestamp - t_a) / (t_b - t_a), 0.0, 1.0);  // stamps out of order
     samples[i].T_world_camera = interpolate_pose(samples[*previous].T_world_camera, samples[*b].T_world_camera, s);
   }
 }
