@@ -197,6 +197,25 @@ void check_gap(const std::filesystem::path& source, size_t frames, size_t gap_be
             << " deg (" << to_string(results[after].status) << ")" << std::endl;
   EXPECT_LE(dt, 0.05);
   EXPECT_LE(dr, 3.0);
+  // The trajectory's poses of the blank frames, interpolated between the frames around the gap
+  // (lost_frame_poses.hpp), against the held pose: error in the motion from the frame before.
+  const Trajectory trajectory = tracker.finish();
+  ASSERT_EQ(trajectory.size(), results.size());
+  double held_m = 0, held_deg = 0, filled_m = 0, filled_deg = 0;
+  for (size_t i = spec.blank_begin; i < spec.blank_end; ++i) {
+    const Pose motion = gt[before].inverse() * gt[i];
+    const Pose filled = trajectory[before].T_world_camera.inverse() * trajectory[i].T_world_camera;
+    held_m += motion.translation().squaredNorm();
+    held_deg += std::pow(rotation_deg(Pose::Identity(), motion), 2);
+    filled_m += (filled.translation() - motion.translation()).squaredNorm();
+    filled_deg += std::pow(rotation_deg(filled, motion), 2);
+  }
+  const double n = double(spec.blank_end - spec.blank_begin);
+  std::cout << "[tracking] blank frames' error in the motion from the frame before the gap: held "
+            << std::sqrt(held_m / n) * 100 << " cm " << std::sqrt(held_deg / n) << " deg, interpolated "
+            << std::sqrt(filled_m / n) * 100 << " cm " << std::sqrt(filled_deg / n) << " deg" << std::endl;
+  EXPECT_LT(filled_m + std::pow(0.01, 2) * filled_deg, held_m + std::pow(0.01, 2) * held_deg)
+      << "1 deg weighed as 1 cm";
 }
 
 TEST(TrackingSlices, TumFr1RpyRelocalisesAfter20BlankFrames) {
