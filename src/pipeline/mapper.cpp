@@ -474,7 +474,8 @@ void Mapper::Impl::refresh_map(const Trajectory& optimised) {
   std::unordered_map<uint32_t, Eigen::Isometry3f> corrections;
   double max_displacement = 0.0;
   for (size_t k = 0; k < frames.size(); ++k) {
-    if (frames[k].held) continue;
+    // A lost frame was never fused, and its final pose is interpolated, not corrected.
+    if (frames[k].held || !frames[k].fused) continue;
     const Pose& online = frames[k].T_world_camera_online;
     corrections[static_cast<uint32_t>(k)] = (T_world_camera[k] * online.inverse()).cast<float>();
     max_displacement = std::max(max_displacement, surface_displacement_m(online, T_world_camera[k], config.tsdf.max_depth));
