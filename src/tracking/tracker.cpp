@@ -421,14 +421,15 @@ struct Tracker::Impl {
       records = frames;
     }
     const std::map<int, Pose> poses = loop.all_poses();
-    std::vector<TrajectorySample> samples;
-    samples.reserve(records.size());
-    for (const auto& f : records)
-      if (f.reference >= 0) samples.push_back({f.timestamp, orthonormalized(poses.at(f.reference) * f.T_ref_frame), !f.lost});
-    fill_lost_poses(samples, cfg.lost_pose_max_gap_s);
     Trajectory out;
-    out.reserve(samples.size());
-    for (const TrajectorySample& s : samples) out.push_back({s.timestamp, s.T_world_camera});
+    std::vector<bool> verified;
+    out.reserve(records.size());
+    for (const auto& f : records) {
+      if (f.reference < 0) continue;
+      out.push_back({f.timestamp, orthonormalized(poses.at(f.reference) * f.T_ref_frame)});
+      verified.push_back(!f.lost);
+    }
+    fill_lost_poses(out, verified, cfg.lost_pose_max_gap_s);
     return out;
   }
 };

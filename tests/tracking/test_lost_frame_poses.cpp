@@ -1,6 +1,7 @@
 // Issue 42: the trajectory's poses of lost frames (src/tracking/lost_frame_poses.cpp).
 #include <gtest/gtest.h>
 
+#include "semap/core/error.hpp"
 #include "tracking/lost_frame_poses.hpp"
 
 namespace semap {
@@ -15,18 +16,19 @@ Pose at(double x, double yaw_rad) {
 
 /// Verified frames at t = 0, 1, 4 (x = t, yaw = t/10); lost frames at 2 and 3 held at t = 1's
 /// pose, and one lost frame after the last verified one at t = 5.
-std::vector<TrajectorySample> held_samples() {
-  std::vector<TrajectorySample> s;
+const std::vector<bool> kVerified = {true, true, false, false, true, false};
+Trajectory held_samples() {
+  Trajectory s;
   for (double t : {0.0, 1.0, 2.0, 3.0, 4.0, 5.0}) {
-    const bool verified = t == 0 || t == 1 || t == 4;
-    s.push_back({t, verified ? at(t, t / 10) : at(t >= 4 ? 4 : 1, (t >= 4 ? 4 : 1) / 10.0), verified});
+    const bool verified = kVerified[size_t(t)];
+    s.push_back({t, verified ? at(t, t / 10) : at(t >= 4 ? 4 : 1, (t >= 4 ? 4 : 1) / 10.0)});
   }
   return s;
 }
 
 TEST(LostFramePoses, LostFramesBetweenVerifiedOnesAreInterpolatedByTime) {
-  std::vector<TrajectorySample> s = held_samples();
-  fill_lost_poses(s, 5.0);
+  Trajectory s = held_samples();
+  fill_lost_poses(s, kVerified, 5.0);
   for (size_t i : {2u, 3u}) {
     const double t = s[i].timestamp;
     EXPECT_NEAR((s[i].T_world_camera.translation() - Eigen::Vector3d(t, 0, 0)).norm(), 0.0, 1e-12) << t;
@@ -40,28 +42,30 @@ TEST(LostFramePoses, LostFramesBetweenVerifiedOnesAreInterpolatedByTime) {
 
 TEST(LostFramePoses, AGapLongerThanTheLimitOrALimitOfZeroKeepsTheHeldPoses) {
   for (double max_gap_s : {2.9, 0.0}) {  // the verified frames around the gap are 3 s apart
-    std::vector<TrajectorySample> s = held_samples();
-    fill_lost_poses(s, max_gap_s);
+    Trajectory s = held_samples();
+    fill_lost_poses(s, kVerified, max_gap_s);
     for (size_t i = 0; i < s.size(); ++i)
       EXPECT_TRUE(s[i].T_world_camera.isApprox(held_samples()[i].T_world_camera)) << max_gap_s << " " << i;
   }
 }
 
-TEST(LostFramePoses, LostFramesBeforeTheFirstVerifiedOneStayHeld) {
-  std::vector<TrajectorySample> s = {{0.0, at(7, 0), false}, {1.0, at(1, 0), true}, {2.0, at(2, 0), true}};
-  fill_lost_poses(s, 5.0);
+TEST(LostFramePoses, LostFramesBeforeTheFirstVerifiedOneStayHeldAndFlagsMustMatch) {
+  Trajectory s = {{0.0, at(7, 0)}, {1.0, at(1, 0)}, {2.0, at(2, 0)}};
+  fill_lost_poses(s, {false, true, true}, 5.0);
   EXPECT_TRUE(s[0].T_world_camera.isApprox(at(7, 0)));
+  EXPECT_THROW(fill_lost_poses(s, {true, true}, 5.0), Error);
 }
 
 TEST(LostFramePoses, EachGapIsInterpolatedBetweenItsOwnVerifiedFrames) {
   // Verified at t = 0, 10, 20 (x = 0, 1, 5); two gaps of 999 lost frames held at the last pose.
-  std::vector<TrajectorySample> s;
+  Trajectory s;
+  std::vector<bool> verified;
   for (int k = 0; k <= 2000; ++k) {
-    const bool verified = k % 1000 == 0;
+    verified.push_back(k % 1000 == 0);
     const double held_x = k < 1000 ? 0 : k < 2000 ? 1 : 5;
-    s.push_back({k / 100.0, at(verified ? held_x : (k < 1000 ? 0 : 1), 0), verified});
+    s.push_back({k / 100.0, at(verified.back() ? held_x : (k < 1000 ? 0 : 1), 0)});
   }
-  fill_lost_poses(s, 10.0);
+  fill_lost_poses(s, verified, 10.0);
   EXPECT_NEAR(s[500].T_world_camera.translation().x(), 0.5, 1e-9);
   EXPECT_NEAR(s[1500].T_world_camera.translation().x(), 3.0, 1e-9);
   EXPECT_NEAR(s[1999].T_world_camera.translation().x(), 1.0 + 4.0 * 0.999, 1e-9);
